@@ -1,0 +1,323 @@
+//! The generated types against their sources: the .msg files, Jazzy's type hashes, the
+//! rosbag2 definition layout, the observation layout of the facts sheet, and round trips.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+
+use composuite_msgs::{ArrayKind, ElementType, MessageVisitor, RosMessage, TypeDescription, cdr};
+use rand::SeedableRng;
+
+fn msgs_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The interface file a type comes from, and the part of it that is the type's own text.
+fn source_text(ros_name: &str) -> Option<String> {
+    let parts: Vec<&str> = ros_name.split('/').collect();
+    let (package, kind, name) = (parts[0], parts[1], parts[2]);
+    let base: PathBuf = if package == "composuite_msgs" {
+        msgs_dir()
+    } else {
+        msgs_dir().join("standard").join(package)
+    };
+    if kind == "msg" {
+        return std::fs::read_to_string(base.join("msg").join(format!("{name}.msg"))).ok();
+    }
+    let (service, half) = name.rsplit_once('_')?;
+    let text = std::fs::read_to_string(base.join("srv").join(format!("{service}.srv"))).ok()?;
+    let (request, response) = text.split_once("---\n")?;
+    match half {
+        "Request" => Some(request.to_string()),
+        "Response" => Some(response.to_string()),
+        _ => None, // `_Event` is synthesized, it has no file
+    }
+}
+
+/// Field names of a .msg text by a plain line scan, independent of the code generator.
+fn field_names_in(text: &str) -> Vec<String> {
+    text.lines()
+        .map(|l| l.split('#').next().unwrap().trim())
+        .filter(|l| !l.is_empty())
+        .filter_map(|l| {
+            let mut words = l.split_whitespace();
+            let _type = words.next()?;
+            let name = words.next()?;
+            (!name.contains('=') && !words.next().is_some_and(|w| w.starts_with('=')))
+                .then(|| name.to_string())
+        })
+        .collect()
+}
+
+struct All(
+    Vec<(
+        &'static str,
+        &'static TypeDescription,
+        &'static str,
+        &'static str,
+        &'static str,
+    )>,
+);
+impl MessageVisitor for All {
+    fn visit<T: RosMessage>(&mut self) {
+        self.0.push((
+            T::ROS_NAME,
+            T::DESCRIPTION,
+            T::DDS_NAME,
+            T::DEFINITION,
+            T::TYPE_HASH,
+        ));
+    }
+}
+
+fn all_types() -> Vec<(
+    &'static str,
+    &'static TypeDescription,
+    &'static str,
+    &'static str,
+    &'static str,
+)> {
+    let mut all = All(Vec::new());
+    composuite_msgs::visit_messages(&mut all);
+    all.0
+}
+
+#[test]
+fn every_interface_file_has_a_type_and_fields_match() {
+    let types = all_types();
+    let mut checked = 0;
+    for (ros_name, desc, ..) in &types {
+        let Some(text) = source_text(ros_name) else {
+            assert!(
+                ros_name.ends_with("_Event"),
+                "{ros_name} has no source file"
+            );
+            continue;
+        };
+        let expected = field_names_in(&text);
+        let actual: Vec<&str> = desc.fields.iter().map(|f| f.name).collect();
+        if expected.is_empty() {
+            assert_eq!(
+                actual,
+                vec!["structure_needs_at_least_one_member"],
+                "{ros_name}"
+            );
+        } else {
+            assert_eq!(
+                actual, expected,
+                "{ros_name}: generated fields differ from its file"
+            );
+        }
+        checked += 1;
+    }
+    // Every .msg/.srv file on disk is covered.
+    let mut files = 0;
+    let mut count = |dir: &Path, ext: &str, per_file: usize| {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            if entry.unwrap().path().extension().is_some_and(|e| e == ext) {
+                files += per_file;
+            }
+        }
+    };
+    count(&msgs_dir().join("msg"), "msg", 1);
+    count(&msgs_dir().join("srv"), "srv", 2);
+    for package in std::fs::read_dir(msgs_dir().join("standard")).unwrap() {
+        let msg_dir = package.unwrap().path().join("msg");
+        if msg_dir.is_dir() {
+            count(&msg_dir, "msg", 1);
+        }
+    }
+    assert_eq!(
+        checked, files,
+        "types with a source file vs. message parts on disk"
+    );
+}
+
+#[test]
+fn names_follow_ros_2_conventions() {
+    for (ros_name, _, dds_name, ..) in all_types() {
+        let parts: Vec<&str> = ros_name.split('/').collect();
+        assert_eq!(parts.len(), 3, "{ros_name}");
+        assert!(parts[1] == "msg" || parts[1] == "srv", "{ros_name}");
+        assert_eq!(
+            dds_name,
+            format!("{}::{}::dds_::{}_", parts[0], parts[1], parts[2])
+        );
+    }
+    assert_eq!(
+        <composuite_msgs::srv::ResetRequest as RosMessage>::DDS_NAME,
+        "composuite_msgs::srv::dds_::Reset_Request_"
+    );
+}
+
+/// Hashes read from the type-description files ROS 2 Jazzy's own generator installs
+/// (`share/<pkg>/msg/<Type>.json` of the ros-jazzy wheels). The interop tests compare every
+/// type; these pins make a regression visible without Python.
+#[test]
+fn jazzy_type_hashes_pinned() {
+    use composuite_msgs::{
+        builtin_interfaces, geometry_msgs, rosgraph_msgs, sensor_msgs, service_msgs, std_msgs,
+    };
+    let pins = [
+        (
+            builtin_interfaces::msg::Time::TYPE_HASH,
+            "b106235e25a4c5ed35098aa0a61a3ee9c9b18d197f398b0e4206cea9acf9c197",
+        ),
+        (
+            std_msgs::msg::Header::TYPE_HASH,
+            "f49fb3ae2cf070f793645ff749683ac6b06203e41c891e17701b1cb597ce6a01",
+        ),
+        (
+            std_msgs::msg::Bool::TYPE_HASH,
+            "feb91e995ff9ebd09c0cb3d2aed18b11077585839fb5db80193b62d74528f6c9",
+        ),
+        (
+            sensor_msgs::msg::JointState::TYPE_HASH,
+            "a13ee3a330e346c9d87b5aa18d24e11690752bd33a0350f11c5882bc9179260e",
+        ),
+        (
+            geometry_msgs::msg::Pose::TYPE_HASH,
+            "d501954e9476cea2996984e812054b68026ae0bfae789d9a10b23daf35cc90fa",
+        ),
+        (
+            rosgraph_msgs::msg::Clock::TYPE_HASH,
+            "692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564",
+        ),
+        // `char[16]` hashes as uint8[16] in Jazzy.
+        (
+            service_msgs::msg::ServiceEventInfo::TYPE_HASH,
+            "41bcbbe07a75c9b52bc96bfd5c24d7f0fc0a08c0cb7921b3373c5732345a6f45",
+        ),
+    ];
+    for (ours, jazzy) in pins {
+        assert_eq!(ours, format!("RIHS01_{jazzy}"));
+    }
+}
+
+#[test]
+fn definitions_follow_the_rosbag2_layout() {
+    let sep = "=".repeat(80);
+    let js = <composuite_msgs::sensor_msgs::msg::JointState as RosMessage>::DEFINITION;
+    let own = source_text("sensor_msgs/msg/JointState").unwrap();
+    let header = source_text("std_msgs/msg/Header").unwrap();
+    let time = source_text("builtin_interfaces/msg/Time").unwrap();
+    assert_eq!(
+        js,
+        format!(
+            "{own}\n{sep}\nMSG: std_msgs/Header\n{header}\n{sep}\nMSG: builtin_interfaces/Time\n{time}"
+        )
+    );
+
+    // Dependencies: sorted at each level, depth-first, each once.
+    let obs = <composuite_msgs::msg::Observation as RosMessage>::DEFINITION;
+    let sections: Vec<&str> = obs
+        .lines()
+        .filter_map(|l| l.strip_prefix("MSG: "))
+        .collect();
+    assert_eq!(
+        sections,
+        [
+            "composuite_msgs/GoalFactor",
+            "geometry_msgs/Point",
+            "geometry_msgs/Quaternion",
+            "geometry_msgs/Vector3",
+            "composuite_msgs/ObjectFactor",
+            "composuite_msgs/ObstacleFactor",
+            "composuite_msgs/RobotFactor",
+            "composuite_msgs/TaskFactor",
+            "std_msgs/Header",
+            "builtin_interfaces/Time",
+        ]
+    );
+    for (ros_name, _, _, definition, _) in all_types() {
+        if let Some(text) = source_text(ros_name) {
+            assert!(
+                definition.starts_with(&text),
+                "{ros_name}: definition must start with its file text"
+            );
+        }
+    }
+}
+
+/// Number of float64 values a type flattens to (the observation factors are all-float).
+fn flat_len(desc: &TypeDescription) -> usize {
+    desc.fields
+        .iter()
+        .map(|f| {
+            let per = match &f.element {
+                ElementType::Float64 => 1,
+                ElementType::Nested(inner) => flat_len(inner),
+                other => panic!("{}.{} is {other:?}, not float64", desc.ros_name, f.name),
+            };
+            match f.array {
+                ArrayKind::Single => per,
+                ArrayKind::Fixed(n) => n * per,
+                other => panic!("{}.{} is a sequence ({other:?})", desc.ros_name, f.name),
+            }
+        })
+        .sum()
+}
+
+/// composuite-facts §5: object 14, obstacle 14, goal 17, task one-hots 4 x 4, robot 32;
+/// 93 with the task indicator, 77 without.
+#[test]
+fn observation_factors_have_the_reference_sizes() {
+    use composuite_msgs::msg::*;
+    let sizes = [
+        flat_len(ObjectFactor::DESCRIPTION),
+        flat_len(ObstacleFactor::DESCRIPTION),
+        flat_len(GoalFactor::DESCRIPTION),
+        flat_len(TaskFactor::DESCRIPTION),
+        flat_len(RobotFactor::DESCRIPTION),
+    ];
+    assert_eq!(sizes, [14, 14, 17, 16, 32]);
+    assert_eq!(
+        sizes.iter().sum::<usize>(),
+        Observation::FLAT_SIZE_WITH_TASK as usize
+    );
+    assert_eq!(
+        sizes.iter().sum::<usize>() - sizes[3],
+        Observation::FLAT_SIZE_WITHOUT_TASK as usize
+    );
+}
+
+/// The bytes real rclpy 7.1.6 (Fast DDS) produced for this header.
+#[test]
+fn header_encodes_like_rclpy() {
+    use composuite_msgs::std_msgs::msg::Header;
+    let header = Header {
+        stamp: composuite_msgs::builtin_interfaces::msg::Time { sec: 1, nanosec: 2 },
+        frame_id: "ab".into(),
+    };
+    assert_eq!(
+        support::hex(&cdr::encode(&header).unwrap()),
+        "00010000010000000200000003000000616200"
+    );
+}
+
+#[test]
+fn defaults_come_from_the_msg_files() {
+    let q = composuite_msgs::geometry_msgs::msg::Quaternion::default();
+    assert_eq!((q.x, q.y, q.z, q.w), (0.0, 0.0, 0.0, 1.0));
+    assert_eq!(composuite_msgs::msg::ScenePart::SHAPE_CYLINDER, 2);
+}
+
+#[test]
+fn random_instances_round_trip_exactly() {
+    struct RoundTrip(rand_chacha::ChaCha8Rng, usize);
+    impl MessageVisitor for RoundTrip {
+        fn visit<T: RosMessage>(&mut self) {
+            for _ in 0..100 {
+                let msg: T = support::random_message(&mut self.0, 4);
+                let bytes = cdr::encode(&msg).unwrap();
+                let back: T = cdr::decode(&bytes).unwrap();
+                assert_eq!(cdr::encode(&back).unwrap(), bytes, "{}", T::ROS_NAME);
+                assert_eq!(back, msg, "{}", T::ROS_NAME);
+                self.1 += 1;
+            }
+        }
+    }
+    let mut visitor = RoundTrip(rand_chacha::ChaCha8Rng::seed_from_u64(7), 0);
+    composuite_msgs::visit_messages(&mut visitor);
+    assert_eq!(visitor.1, 100 * support::message_names().len());
+}
