@@ -1,0 +1,18 @@
+//! The ROS-free core of CompoSuite-ROS.
+//!
+//! A CompoSuite task is one element from each of four axes — robot, object, obstacle,
+//! objective — giving 4 × 4 × 4 × 4 = 256 tasks. Each axis is its own module under [`axes`],
+//! holding an enum and one table of data per element. This crate has no ROS in it; the nodes
+//! are thin adapters over it.
+#![warn(missing_docs)]
+
+pub mod axes;
+mod task;
+
+pub use task::{TaskParseError, TaskSpec, all_tasks};
+
+/// The things most callers need.
+pub mod prelude {
+    pub use crate::axes::{Axis, AxisElement, Object, Objective, Obstacle, Robot, UnknownElement};
+    pub use crate::task::{TaskSpec, all_tasks};
+}
