@@ -67,3 +67,243 @@ fn a_bad_filter_is_a_clear_error() {
     );
     assert!(out.stdout.is_empty());
 }
+
+fn split_json(args: &[&str]) -> (Vec<String>, Vec<String>) {
+    let out = composuite(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let value: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let object = value.as_object().unwrap();
+    assert_eq!(object.keys().collect::<Vec<_>>(), ["test", "train"]);
+    let list = |key: &str| -> Vec<String> {
+        value[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t.as_str().unwrap().to_string())
+            .collect()
+    };
+    (list("train"), list("test"))
+}
+
+/// Pinned with CPython 3.11.7 running the reference algorithm (see
+/// tests/py/test_splits_reference.py, which checks many more seeds against this binary).
+#[test]
+fn split_json_is_train_and_test_in_wire_names() {
+    let out = composuite(&[
+        "tasks",
+        "--split",
+        "default",
+        "--num-train",
+        "2",
+        "--seed",
+        "42",
+        "--json",
+    ]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.starts_with("{\"train\":[\"Panda/plate/object_door/shelf\","),
+        "{text}"
+    );
+    let (train, test) = split_json(&[
+        "tasks",
+        "--split",
+        "default",
+        "--num-train",
+        "5",
+        "--seed",
+        "42",
+        "--json",
+    ]);
+    assert_eq!(
+        train,
+        [
+            "Panda/plate/object_door/shelf",
+            "IIWA/box/object_door/push",
+            "Jaco/plate/goal_wall/trash_can",
+            "IIWA/hollow_box/object_wall/pick_place",
+            "IIWA/box/goal_wall/push",
+        ]
+    );
+    assert_eq!(test.len(), 251);
+}
+
+#[test]
+fn holdout_split_accepts_reference_spellings_and_ends_train_with_the_element() {
+    let (train, test) = split_json(&[
+        "tasks",
+        "--split",
+        "holdout",
+        "--num-train",
+        "4",
+        "--element",
+        "ObjectWall",
+        "--seed",
+        "7",
+        "--json",
+    ]);
+    assert_eq!(
+        train,
+        [
+            "Jaco/plate/object_door/shelf",
+            "Gen3/hollow_box/no_obstacle/shelf",
+            "Gen3/hollow_box/object_door/shelf",
+            "Panda/hollow_box/object_wall/shelf",
+        ]
+    );
+    assert_eq!(test.len(), 63);
+    assert!(test.iter().all(|t| t.contains("/object_wall/")));
+    let wire = split_json(&[
+        "tasks",
+        "--split",
+        "holdout",
+        "--num-train",
+        "4",
+        "--element",
+        "object_wall",
+        "--seed",
+        "7",
+        "--json",
+    ]);
+    assert_eq!(wire, (train, test));
+}
+
+#[test]
+fn smallscale_no_shuffle_is_the_reference_order() {
+    let (train, test) = split_json(&[
+        "tasks",
+        "--split",
+        "smallscale",
+        "--num-train",
+        "2",
+        "--element",
+        "plate",
+        "--no-shuffle",
+        "--json",
+    ]);
+    assert_eq!(
+        train,
+        [
+            "IIWA/plate/no_obstacle/pick_place",
+            "IIWA/plate/no_obstacle/push"
+        ]
+    );
+    assert_eq!(test.len(), 62);
+    assert_eq!(test[0], "IIWA/plate/no_obstacle/shelf");
+}
+
+#[test]
+fn split_human_output_has_both_lists_with_counts() {
+    let out = composuite(&[
+        "tasks",
+        "--split",
+        "smallscale",
+        "--num-train",
+        "3",
+        "--element",
+        "Jaco",
+        "--seed",
+        "1",
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "train (3 task(s)):");
+    assert_eq!(lines[4], "test (61 task(s)):");
+    assert_eq!(lines.len(), 2 + 64);
+    assert!(
+        lines[1..4].iter().all(|l| l.starts_with("  Jaco/")),
+        "{text}"
+    );
+}
+
+#[test]
+fn split_errors_say_what_is_valid() {
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["--split", "uniform", "--num-train", "1", "--seed", "0"],
+            "unknown split \"uniform\"; valid: default, smallscale, holdout",
+        ),
+        (
+            &["--split", "default", "--num-train", "257", "--seed", "0"],
+            "num_train 257 is out of range for the default split; valid: 0 to 256",
+        ),
+        (
+            &[
+                "--split",
+                "holdout",
+                "--num-train",
+                "0",
+                "--element",
+                "Jaco",
+                "--seed",
+                "0",
+            ],
+            "valid: 1 to 193",
+        ),
+        (
+            &["--split", "holdout", "--num-train", "3", "--seed", "0"],
+            "the holdout split needs an element; valid: robot IIWA, Jaco, Gen3, Panda;",
+        ),
+        (
+            &[
+                "--split",
+                "smallscale",
+                "--num-train",
+                "3",
+                "--element",
+                "sphere",
+                "--seed",
+                "0",
+            ],
+            "unknown element \"sphere\"; valid: robot IIWA",
+        ),
+        (
+            &["--split", "default", "--num-train", "3"],
+            "--split default needs --seed S",
+        ),
+    ];
+    for (args, expected) in cases {
+        let out = composuite(&[&["tasks"], args].concat());
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(out.stdout.is_empty());
+    }
+}
+
+#[test]
+fn split_options_need_split_and_exclude_filters() {
+    for args in [
+        &["tasks", "--seed", "3"][..],
+        &[
+            "tasks",
+            "--split",
+            "default",
+            "--num-train",
+            "1",
+            "--seed",
+            "0",
+            "--robot",
+            "IIWA",
+        ],
+    ] {
+        let out = composuite(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(out.stdout.is_empty());
+    }
+}
+
+#[test]
+fn help_shows_a_split_example() {
+    let out = composuite(&["tasks", "--help"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("composuite tasks --split default --num-train 56 --seed 42"),
+        "{text}"
+    );
+    assert!(text.contains("--element <E>"), "{text}");
+}

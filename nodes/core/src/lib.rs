@@ -6,7 +6,14 @@
 //! are thin adapters over it.
 #![warn(missing_docs)]
 
+pub mod arena;
 pub mod axes;
+pub mod control;
+pub mod kinematics;
+pub mod physics;
+pub mod reward;
+pub mod rng;
+pub mod sampling;
 mod task;
 
 pub use task::{TaskParseError, TaskSpec, all_tasks};

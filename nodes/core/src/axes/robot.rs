@@ -27,3 +27,27 @@ impl AxisElement for Robot {
         ElementNames { element: Robot::Panda, wire: "Panda", reference: "Panda", aliases: &["franka", "franka_panda"], one_hot_index: 2, reference_order: 3 },
     ];
 }
+
+impl Robot {
+    /// The joint positions every episode starts from (rad): robosuite's defaults, which the
+    /// reference uses unchanged and without noise (composuite-facts §4.1).
+    pub fn init_qpos(self) -> [f64; 7] {
+        use std::f64::consts::PI;
+        match self {
+            Robot::Iiwa => [0.0, 0.65, 0.0, -1.89, 0.0, 0.6, 0.0],
+            // 3.142 is robosuite's literal, not π.
+            #[allow(clippy::approx_constant)]
+            Robot::Jaco => [3.192, 3.680, 0.0, 1.170, 0.050, 3.760, 3.142],
+            Robot::Gen3 => [0.0, 0.65, 0.0, 1.89, 0.0, 0.6, -PI / 2.0],
+            Robot::Panda => [
+                0.0,
+                PI / 16.0,
+                0.0,
+                -5.0 * PI / 6.0,
+                0.0,
+                PI - 0.2,
+                PI / 4.0,
+            ],
+        }
+    }
+}

@@ -1,0 +1,141 @@
+//! Forward and inverse kinematics of an arm model, in f64, independent of the physics engine.
+//!
+//! FK walks the joint chain of a [`RobotModel`]; IK is damped least squares on that FK with the
+//! joint limits respected. This is what scripted controllers use to turn a desired gripper
+//! pose into joint targets (the arm itself is driven only through its joint servos).
+
+use nalgebra::{
+    Isometry3, Matrix3, Rotation3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3,
+};
+
+use crate::arena::robot_base_pose;
+use crate::physics::{ARM_DOF, JointKind, RobotModel};
+
+/// World poses of every body for joint positions `q` (arm joints; fingers at `q_fingers`).
+pub fn body_poses(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+    q_fingers: [f64; 2],
+) -> Vec<Isometry3<f64>> {
+    let mut poses = vec![robot_base_pose(); model.bodies.len()];
+    for (j, joint) in model.joints.iter().enumerate() {
+        let value = if j < ARM_DOF {
+            q[j]
+        } else {
+            q_fingers[j - ARM_DOF]
+        };
+        let motion = match joint.kind {
+            JointKind::Revolute => Isometry3::from_parts(
+                Translation3::identity(),
+                UnitQuaternion::from_scaled_axis(joint.axis * value),
+            ),
+            JointKind::Prismatic => Isometry3::from_parts(
+                Translation3::from(joint.axis * value),
+                UnitQuaternion::identity(),
+            ),
+        };
+        poses[joint.child] = poses[joint.parent] * joint.origin * motion;
+    }
+    poses
+}
+
+/// World pose of a named URDF link for arm joint positions `q`.
+pub fn link_pose(model: &RobotModel, q: &[f64; ARM_DOF], link: &str) -> Option<Isometry3<f64>> {
+    let (body, in_body) = *model.links.get(link)?;
+    Some(body_poses(model, q, [0.0, 0.0])[body] * in_body)
+}
+
+/// A desired gripper pose for IK.
+#[derive(Debug, Clone, Copy)]
+pub struct IkTarget {
+    /// World position of the point `link` should reach.
+    pub position: Vector3<f64>,
+    /// Desired world orientation of `link`, or `None` for position only.
+    pub orientation: Option<UnitQuaternion<f64>>,
+    /// Weight of the orientation error (rad) against the position error (m).
+    pub orientation_weight: f64,
+}
+
+/// How an IK solve ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IkResult {
+    /// Joint positions found (within limits).
+    pub q: [f64; ARM_DOF],
+    /// Remaining position error (m).
+    pub position_error: f64,
+    /// Remaining orientation error (rad; 0 when not constrained).
+    pub orientation_error: f64,
+    /// Iterations used.
+    pub iterations: usize,
+}
+
+/// Damped-least-squares IK for `link` (e.g. the grip site) from the seed `q0`.
+pub fn solve_ik(
+    model: &RobotModel,
+    link: &str,
+    target: &IkTarget,
+    q0: &[f64; ARM_DOF],
+    max_iterations: usize,
+) -> Option<IkResult> {
+    let (body, in_body) = *model.links.get(link)?;
+    let mut q = *q0;
+    let damping = 0.05_f64;
+    let mut result = None;
+    for iteration in 0..=max_iterations {
+        let poses = body_poses(model, &q, [0.0, 0.0]);
+        let pose = poses[body] * in_body;
+        let p = pose.translation.vector;
+        let e_pos = target.position - p;
+        let e_rot = match target.orientation {
+            Some(r) => (r * pose.rotation.inverse()).scaled_axis(),
+            None => Vector3::zeros(),
+        };
+        result = Some(IkResult {
+            q,
+            position_error: e_pos.norm(),
+            orientation_error: e_rot.norm(),
+            iterations: iteration,
+        });
+        if iteration == max_iterations || (e_pos.norm() < 1e-5 && e_rot.norm() < 1e-4) {
+            break;
+        }
+        let w = if target.orientation.is_some() {
+            target.orientation_weight
+        } else {
+            0.0
+        };
+        let mut jac = SMatrix::<f64, 6, ARM_DOF>::zeros();
+        for (j, joint) in model.joints.iter().enumerate().take(ARM_DOF) {
+            let frame = poses[joint.child];
+            let axis = frame.rotation * joint.axis;
+            let anchor = frame.translation.vector;
+            let lin = axis.cross(&(p - anchor));
+            jac.fixed_view_mut::<3, 1>(0, j).copy_from(&lin);
+            jac.fixed_view_mut::<3, 1>(3, j).copy_from(&(axis * w));
+        }
+        let mut err = SVector::<f64, 6>::zeros();
+        err.fixed_rows_mut::<3>(0).copy_from(&e_pos);
+        err.fixed_rows_mut::<3>(3).copy_from(&(e_rot * w));
+        let jjt = jac * jac.transpose() + SMatrix::<f64, 6, 6>::identity() * damping * damping;
+        let dq = jac.transpose() * jjt.lu().solve(&err)?;
+        for (j, joint) in model.joints.iter().enumerate().take(ARM_DOF) {
+            // Limit each update so the linearisation stays valid.
+            q[j] += dq[j].clamp(-0.2, 0.2);
+            if let Some((lo, hi)) = joint.limits {
+                q[j] = q[j].clamp(lo, hi);
+            }
+        }
+    }
+    result
+}
+
+/// A rotation whose z axis points along `z` and whose y axis is as close as possible to `y`.
+pub fn frame_from_axes(z: Vector3<f64>, y: Vector3<f64>) -> UnitQuaternion<f64> {
+    let z = z.normalize();
+    let x = y.cross(&z).normalize();
+    let y = z.cross(&x);
+    // Exact conversion: nalgebra's iterative `from_matrix` can miss rotations near 180°.
+    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(Matrix3::from_columns(
+        &[x, y, z],
+    )))
+}

@@ -1,0 +1,20 @@
+//! Physics: the arms and gripper in rapier3d, joint servos, contacts.
+//!
+//! Settings that keep grasps firm at 2 ms steps (see `PhysicsParams`): multibody (reduced
+//! coordinate) arms, force-based joint motors, stiff contacts, one solver iteration with eight
+//! inner PGS iterations, coupled fingers.
+
+mod params;
+mod robot_model;
+mod tags;
+mod world;
+
+pub use params::{ArmGains, GripperParams, PhysicsParams};
+pub use robot_model::{
+    BodyModel, CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, JointModel,
+    ModelError, RobotModel, Shape, build_model, robot_model,
+};
+pub use tags::{ColliderTag, Side};
+pub use world::{
+    ARM_DOF, ArmHandles, FINGER_OPEN, GripperCommand, SimWorld, from_pose, pad_gap, to_pose,
+};

@@ -1,0 +1,718 @@
+//! A rapier world holding one arm with its gripper, static scene parts and (optionally) one
+//! object, stepped at the physics period with joint position servos.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use rapier3d::prelude::*;
+
+use super::params::{ArmGains, GripperParams, PhysicsParams};
+use super::robot_model::{
+    CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, RobotModel, Shape,
+    robot_model,
+};
+use super::tags::{ColliderTag, Side};
+use crate::arena::{Placed, Primitive, object_geometry, robot_base_pose};
+use crate::axes::{Object, Robot};
+
+/// Number of arm joints.
+pub const ARM_DOF: usize = 7;
+
+/// How the gripper is being commanded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GripperCommand {
+    /// Reach this opening between the pads (m) with at most this force per finger (N).
+    Width {
+        /// Target pad gap (m); clamped to what the fingers can reach.
+        width: f64,
+        /// Force limit per finger (N), at most the servo's limit.
+        max_effort: f64,
+    },
+    /// The reference's scheme: an internal command c in [−1, 1] moves by 0.01·sign(action)
+    /// every physics step (+ closes, − opens, 0 holds) and maps linearly onto the servo range.
+    Reference {
+        /// The last action's gripper component; only its sign matters.
+        action: f64,
+    },
+}
+
+/// The pad gap at finger position `q_left` (fingers coupled, q_right = −q_left):
+/// 0.0371 m at q = 0 (arm-facts, rethink_gripper.geometry_summary).
+pub fn pad_gap(q_left: f64) -> f64 {
+    0.0371 + 2.0 * q_left
+}
+
+/// Handles of one arm in the world.
+#[derive(Debug, Clone)]
+pub struct ArmHandles {
+    /// Rigid body of each model body (index 0: the fixed base).
+    pub bodies: Vec<RigidBodyHandle>,
+    /// The multibody joint of each model joint (7 arm joints, then left and right finger).
+    pub joints: Vec<MultibodyJointHandle>,
+    /// Finger colliders: (collider, tag).
+    pub finger_colliders: Vec<(ColliderHandle, ColliderTag)>,
+    /// Body and in-body pose of the grip site.
+    pub grip_site: (usize, Isometry3<f64>),
+    /// Body and in-body pose of the hand frame.
+    pub hand: (usize, Isometry3<f64>),
+    /// For each arm joint, which bodies move with it (for gravity compensation).
+    pub downstream: Vec<Vec<usize>>,
+}
+
+/// The simulated world: rapier sets plus the arm's handles and command state.
+pub struct SimWorld {
+    /// Rapier's world (bodies, colliders, joints, pipeline).
+    pub physics: PhysicsWorld,
+    /// Which arm.
+    pub robot: Robot,
+    /// The arm's model.
+    pub model: &'static RobotModel,
+    /// The arm's handles.
+    pub arm: ArmHandles,
+    /// Servo gains.
+    pub gains: ArmGains,
+    /// Finger servo settings.
+    pub gripper: GripperParams,
+    /// Settings the world was built with.
+    pub params: PhysicsParams,
+    /// Current joint position targets (rad), as commanded.
+    arm_targets: [f64; ARM_DOF],
+    /// The servos' set points (rad): they move toward the targets no faster than each joint's
+    /// velocity limit, as a real arm's joint-limit layer does with position commands.
+    setpoints: [f64; ARM_DOF],
+    gripper_command: GripperCommand,
+    /// The reference's internal gripper command c in [−1, 1].
+    gripper_c: f64,
+    /// The object body, if one was added.
+    pub object: Option<RigidBodyHandle>,
+    /// Physics steps taken.
+    pub steps: u64,
+}
+
+fn to_vec(v: &Vector3<f64>) -> Vector {
+    Vector::new(v.x as Real, v.y as Real, v.z as Real)
+}
+
+/// nalgebra pose (f64) to rapier pose.
+pub fn to_pose(p: &Isometry3<f64>) -> Pose {
+    let q = p.rotation.quaternion();
+    Pose::from_parts(
+        to_vec(&p.translation.vector),
+        Rotation::from_xyzw(q.i as Real, q.j as Real, q.k as Real, q.w as Real),
+    )
+}
+
+/// rapier pose to nalgebra pose (f64).
+pub fn from_pose(p: &Pose) -> Isometry3<f64> {
+    let t = p.translation;
+    let r = p.rotation;
+    Isometry3::from_parts(
+        Translation3::new(t.x as f64, t.y as f64, t.z as f64),
+        UnitQuaternion::new_normalize(nalgebra::Quaternion::new(
+            r.w as f64, r.x as f64, r.y as f64, r.z as f64,
+        )),
+    )
+}
+
+/// A rapier shape and its pose for an arena primitive (cylinders along the pose's z axis).
+fn primitive_shape(shape: &Primitive, pose: &Isometry3<f64>) -> (SharedShape, Pose) {
+    match *shape {
+        Primitive::Box { half_extents: h } => (
+            SharedShape::cuboid(h.x as Real, h.y as Real, h.z as Real),
+            to_pose(pose),
+        ),
+        // Parry's cylinders run along y.
+        Primitive::Cylinder {
+            radius,
+            half_length,
+        } => (
+            SharedShape::cylinder(half_length as Real, radius as Real),
+            to_pose(pose) * Pose::rotation(Vector::X * std::f32::consts::FRAC_PI_2),
+        ),
+    }
+}
+
+fn shape_of(c: &CollisionShape) -> (SharedShape, Pose) {
+    let pose = to_pose(&c.pose);
+    match c.shape {
+        Shape::Box(h) => (
+            SharedShape::cuboid(h.x as Real, h.y as Real, h.z as Real),
+            pose,
+        ),
+        Shape::Capsule {
+            radius,
+            half_length,
+        } => (
+            SharedShape::capsule_z(half_length as Real, radius as Real),
+            pose,
+        ),
+        // Parry's cylinders run along y; URDF's along z.
+        Shape::Cylinder {
+            radius,
+            half_length,
+        } => (
+            SharedShape::cylinder(half_length as Real, radius as Real),
+            pose * Pose::rotation(Vector::X * std::f32::consts::FRAC_PI_2),
+        ),
+        Shape::Sphere(r) => (SharedShape::ball(r as Real), pose),
+    }
+}
+
+fn tag_for(collision_name: &str, body: usize) -> ColliderTag {
+    match collision_name {
+        "l_fingerpad" => ColliderTag::Pad(Side::Left),
+        "r_fingerpad" => ColliderTag::Pad(Side::Right),
+        n if n.starts_with("l_finger") => ColliderTag::Finger(Side::Left),
+        n if n.starts_with("r_finger") => ColliderTag::Finger(Side::Right),
+        "gripper_base" => ColliderTag::GripperBase,
+        _ => ColliderTag::Arm(body as u32),
+    }
+}
+
+impl SimWorld {
+    /// A world with `robot` on its pedestal at the reference base pose, at its initial joint
+    /// positions with the gripper fully open, and a ground plane.
+    pub fn new(robot: Robot, params: PhysicsParams) -> SimWorld {
+        let model = robot_model(robot);
+        let mut physics = PhysicsWorld::new();
+        physics.gravity = Vector::new(0.0, 0.0, -params.gravity as Real);
+        let ip = &mut physics.integration_parameters;
+        ip.dt = params.dt as Real;
+        ip.num_solver_iterations = params.solver_iterations;
+        ip.num_internal_pgs_iterations = params.internal_pgs_iterations;
+        ip.length_unit = params.length_unit as Real;
+        ip.contact_softness = SpringCoefficients::new(
+            params.contact_frequency as Real,
+            params.contact_damping_ratio as Real,
+        );
+        ip.static_contact_softness = SpringCoefficients::new(
+            2.0 * params.contact_frequency as Real,
+            params.contact_damping_ratio as Real,
+        );
+
+        let ground = physics.insert_body(RigidBodyBuilder::fixed());
+        physics.insert_collider(
+            ColliderBuilder::halfspace(rapier3d::na::Unit::new_unchecked(Vector::Z))
+                .user_data(ColliderTag::Ground.encode()),
+            Some(ground),
+        );
+
+        let arm = insert_arm(&mut physics, model, &robot_base_pose());
+        let gains = ArmGains::for_robot(robot);
+        let mut world = SimWorld {
+            physics,
+            robot,
+            model,
+            arm,
+            gains,
+            gripper: GripperParams::default(),
+            params,
+            arm_targets: robot.init_qpos(),
+            setpoints: robot.init_qpos(),
+            gripper_command: GripperCommand::Reference { action: 0.0 },
+            gripper_c: 0.0,
+            object: None,
+            steps: 0,
+        };
+        world.configure_joints();
+        world.reset_arm(&robot.init_qpos(), FINGER_OPEN);
+        world
+    }
+
+    fn configure_joints(&mut self) {
+        let (mb, _) = self
+            .physics
+            .multibody_joints
+            .get_mut(self.arm.joints[0])
+            .expect("arm multibody");
+        mb.set_self_contacts_enabled(false);
+        for (dof, joint) in self.model.joints.iter().enumerate().take(ARM_DOF) {
+            mb.armature_mut()[dof] = self.gains.armature[dof] as Real;
+            mb.damping_mut()[dof] = self.gains.damping[dof] as Real;
+            let _ = joint;
+        }
+        for dof in ARM_DOF..self.model.joints.len() {
+            mb.damping_mut()[dof] = 0.0;
+        }
+        // The fingers move as one: q_right = −q_left (a mimic joint).
+        let left = self.link_id(ARM_DOF);
+        let right = self.link_id(ARM_DOF + 1);
+        let (mb, _) = self
+            .physics
+            .multibody_joints
+            .get_mut(self.arm.joints[0])
+            .expect("arm multibody");
+        mb.add_dof_coupling(MultibodyDofCoupling {
+            link1: left,
+            dof1: 0,
+            axis1: 0,
+            link2: right,
+            dof2: 0,
+            axis2: 0,
+            coeff: -1.0,
+            offset: 0.0,
+        });
+    }
+
+    /// The multibody link id of model joint `j`.
+    fn link_id(&self, j: usize) -> usize {
+        self.physics
+            .multibody_joints
+            .get(self.arm.joints[j])
+            .expect("joint")
+            .1
+    }
+
+    fn multibody(&self) -> &Multibody {
+        self.physics
+            .multibody_joints
+            .get(self.arm.joints[0])
+            .expect("arm multibody")
+            .0
+    }
+
+    /// Position of model joint `j` (rad or m).
+    pub fn joint_position(&self, j: usize) -> f64 {
+        let link = self.multibody().link(self.link_id(j)).expect("link");
+        let axis = coordinate_axis(self.model.joints[j].kind);
+        link.joint.coords()[axis] as f64
+    }
+
+    /// Velocity of model joint `j` (rad/s or m/s).
+    pub fn joint_velocity(&self, j: usize) -> f64 {
+        let mb = self.multibody();
+        let link = mb.link(self.link_id(j)).expect("link");
+        mb.joint_velocity(link)[0] as f64
+    }
+
+    /// The seven arm joint positions (rad).
+    pub fn arm_positions(&self) -> [f64; ARM_DOF] {
+        std::array::from_fn(|j| self.joint_position(j))
+    }
+
+    /// The seven arm joint velocities (rad/s).
+    pub fn arm_velocities(&self) -> [f64; ARM_DOF] {
+        std::array::from_fn(|j| self.joint_velocity(j))
+    }
+
+    /// Finger joint positions (left, right) in m.
+    pub fn finger_positions(&self) -> [f64; 2] {
+        [
+            self.joint_position(ARM_DOF),
+            self.joint_position(ARM_DOF + 1),
+        ]
+    }
+
+    /// Put the arm at `q` (rad) and the fingers at `q_left` (m), at rest, with matching targets.
+    pub fn reset_arm(&mut self, q: &[f64; ARM_DOF], q_left: f64) {
+        let mut wanted: Vec<f64> = q.to_vec();
+        wanted.push(q_left);
+        wanted.push(-q_left);
+        let current: Vec<f64> = (0..wanted.len()).map(|j| self.joint_position(j)).collect();
+        let link_ids: Vec<usize> = (0..wanted.len()).map(|j| self.link_id(j)).collect();
+        let physics = &mut self.physics;
+        let (mb, _) = physics
+            .multibody_joints
+            .get_mut(self.arm.joints[0])
+            .expect("arm multibody");
+        // Displacements are indexed by generalized coordinate (the root may own some).
+        let mut disp: Vec<Real> = vec![0.0; mb.ndofs()];
+        for (j, link) in link_ids.iter().enumerate() {
+            disp[mb.link(*link).expect("link").assembly_id()] = (wanted[j] - current[j]) as Real;
+        }
+        mb.apply_displacements(&disp);
+        mb.generalized_velocity_mut().fill(0.0);
+        mb.forward_kinematics(&physics.bodies, true);
+        mb.update_rigid_bodies(&mut physics.bodies, false);
+        for &handle in &self.arm.bodies {
+            if let Some(body) = physics.bodies.get_mut(handle) {
+                body.set_linvel(Vector::ZERO, true);
+                body.set_angvel(Vector::ZERO, true);
+            }
+        }
+        self.arm_targets = *q;
+        self.setpoints = *q;
+        self.gripper_c = 0.0;
+        self.gripper_command = GripperCommand::Width {
+            width: pad_gap(q_left),
+            max_effort: self.gripper.max_force,
+        };
+    }
+
+    /// Set absolute arm joint targets (rad), used from the next physics step on. The caller
+    /// validates them (see `control::limits`); here they are only clamped to the joint limits.
+    pub fn set_arm_targets(&mut self, targets: &[f64; ARM_DOF]) {
+        for (j, t) in targets.iter().enumerate() {
+            self.arm_targets[j] = match self.model.joints[j].limits {
+                Some((lo, hi)) => t.clamp(lo, hi),
+                None => *t,
+            };
+        }
+    }
+
+    /// Current arm targets (rad).
+    pub fn arm_targets(&self) -> [f64; ARM_DOF] {
+        self.arm_targets
+    }
+
+    /// Command the gripper.
+    pub fn set_gripper(&mut self, command: GripperCommand) {
+        self.gripper_command = command;
+    }
+
+    /// The reference's internal gripper command c in [−1, 1] (+1 closed).
+    pub fn gripper_c(&self) -> f64 {
+        self.gripper_c
+    }
+
+    /// Gravity torque on each arm joint at the current configuration (N·m): what the servos
+    /// must add to hold still.
+    pub fn gravity_torques(&self) -> [f64; ARM_DOF] {
+        let g = Vector3::new(0.0, 0.0, -self.params.gravity);
+        let bodies = &self.physics.bodies;
+        let mut tau = [0.0; ARM_DOF];
+        for (j, joint) in self.model.joints.iter().enumerate().take(ARM_DOF) {
+            let child = &bodies[self.arm.bodies[joint.child]];
+            let frame = from_pose(child.position());
+            let anchor = frame.translation.vector;
+            let axis = frame.rotation * joint.axis;
+            for &b in &self.arm.downstream[j] {
+                let body = &bodies[self.arm.bodies[b]];
+                let com = body.center_of_mass();
+                let r = Vector3::new(com.x as f64, com.y as f64, com.z as f64) - anchor;
+                tau[j] += r.cross(&(g * body.mass() as f64)).dot(&axis);
+            }
+        }
+        tau
+    }
+
+    fn update_servos(&mut self) {
+        let tau_g = self.gravity_torques();
+        let gripper_targets = self.finger_targets();
+        let gains = self.gains.clone();
+        let gripper = self.gripper.clone();
+        let link_ids: Vec<usize> = (0..self.model.joints.len())
+            .map(|j| self.link_id(j))
+            .collect();
+        let (mb, _) = self
+            .physics
+            .multibody_joints
+            .get_mut(self.arm.joints[0])
+            .expect("arm multibody");
+        let dt = self.params.dt;
+        for j in 0..ARM_DOF {
+            let joint = &self.model.joints[j];
+            let max_step = joint.velocity * dt;
+            let step = (self.arm_targets[j] - self.setpoints[j]).clamp(-max_step, max_step);
+            self.setpoints[j] += step;
+            // Feed-forward gravity compensation through the servo's set point: at q = set point
+            // the spring pushes exactly −τ_g.
+            let target = self.setpoints[j] - tau_g[j] / gains.kp[j];
+            let data = &mut mb.link_mut(link_ids[j]).expect("link").joint.data;
+            data.set_motor_position(
+                JointAxis::AngX,
+                target as Real,
+                gains.kp[j] as Real,
+                gains.kd[j] as Real,
+            );
+            let effort = joint.effort;
+            data.set_motor_max_force(JointAxis::AngX, effort as Real);
+        }
+        let (targets, max_force) = gripper_targets;
+        for (i, target) in targets.iter().enumerate() {
+            let data = &mut mb.link_mut(link_ids[ARM_DOF + i]).expect("link").joint.data;
+            data.set_motor_position(
+                JointAxis::LinX,
+                *target as Real,
+                gripper.kp as Real,
+                gripper.kd as Real,
+            );
+            data.set_motor_max_force(JointAxis::LinX, max_force as Real);
+        }
+    }
+
+    /// Finger servo targets (left, right) and force limit for the current command; advances
+    /// the reference's internal command by one physics step.
+    fn finger_targets(&mut self) -> ([f64; 2], f64) {
+        let (lo, hi) = self.model.joints[ARM_DOF].limits.expect("finger limits");
+        match self.gripper_command {
+            GripperCommand::Width { width, max_effort } => {
+                let mut q = (width - pad_gap(0.0)) / 2.0;
+                if q <= lo {
+                    // Closing onto the stop (or an object): aim past it so the force saturates.
+                    q = lo - self.gripper.close_overshoot;
+                }
+                let q = q.min(hi);
+                let force = if max_effort > 0.0 {
+                    max_effort.min(self.gripper.max_force)
+                } else {
+                    self.gripper.max_force
+                };
+                ([q, -q], force)
+            }
+            GripperCommand::Reference { action } => {
+                let step = if action > 0.0 {
+                    0.01
+                } else if action < 0.0 {
+                    -0.01
+                } else {
+                    0.0
+                };
+                self.gripper_c = (self.gripper_c + step).clamp(-1.0, 1.0);
+                // The reference maps c linearly onto the actuator range: +1 aims the left finger
+                // at −0.020833 (past its closed stop), −1 at +0.0115 (its "open").
+                let (closed, open) = (-0.020833, 0.0115);
+                let q = open + (self.gripper_c + 1.0) / 2.0 * (closed - open);
+                ([q, -q], self.gripper.max_force)
+            }
+        }
+    }
+
+    /// One physics step.
+    pub fn step(&mut self) {
+        self.update_servos();
+        self.physics.step();
+        self.steps += 1;
+    }
+
+    /// One control period (`substeps` physics steps).
+    pub fn step_control(&mut self) {
+        for _ in 0..self.params.substeps {
+            self.step();
+        }
+    }
+
+    fn link_pose(&self, (body, in_body): (usize, Isometry3<f64>)) -> Isometry3<f64> {
+        from_pose(self.physics.bodies[self.arm.bodies[body]].position()) * in_body
+    }
+
+    /// World pose of the grip site (the reference's end-effector point).
+    pub fn grip_site_pose(&self) -> Isometry3<f64> {
+        self.link_pose(self.arm.grip_site)
+    }
+
+    /// World pose of the hand frame (its orientation is the reference's `eef_quat`).
+    pub fn hand_pose(&self) -> Isometry3<f64> {
+        self.link_pose(self.arm.hand)
+    }
+
+    /// World pose of a URDF link by name.
+    pub fn link_world_pose(&self, name: &str) -> Option<Isometry3<f64>> {
+        self.model.links.get(name).map(|l| self.link_pose(*l))
+    }
+
+    /// Add the static parts of an arena (bins, fixture, obstacle); visual-only parts are skipped.
+    /// Each collider is tagged with its index in `parts`.
+    pub fn add_arena(&mut self, parts: &[Placed]) {
+        let body = self.physics.insert_body(RigidBodyBuilder::fixed());
+        for (index, part) in parts.iter().enumerate().filter(|(_, p)| p.collides) {
+            let (shape, pose) = primitive_shape(&part.shape, &part.pose);
+            self.physics.insert_collider(
+                ColliderBuilder::new(shape)
+                    .position(pose)
+                    .friction(part.friction.slide as Real)
+                    .user_data(ColliderTag::Arena(index as u32).encode()),
+                Some(body),
+            );
+        }
+    }
+
+    /// Add the manipulated object at `pose`: one compound collider of its primitives, with the
+    /// reference's mass (uniform density, so the primitives give its centre of mass and inertia).
+    pub fn add_object(&mut self, object: Object, pose: &Isometry3<f64>) -> RigidBodyHandle {
+        let geometry = object_geometry(object);
+        let shapes: Vec<(Pose, SharedShape)> = crate::arena::object_parts(object)
+            .iter()
+            .filter(|p| p.collides)
+            .map(|p| {
+                let (shape, local) = primitive_shape(&p.shape, &p.pose);
+                (local, shape)
+            })
+            .collect();
+        let compound = SharedShape::compound(shapes);
+        let unit = compound.mass_properties(1.0);
+        let density = (geometry.mass() / unit.mass() as f64) as Real;
+        let friction = geometry.parts.first().map_or(1.0, |p| p.friction.slide);
+        let body = self.physics.insert_body(
+            RigidBodyBuilder::dynamic()
+                .pose(to_pose(pose))
+                .can_sleep(false),
+        );
+        self.physics.insert_collider(
+            ColliderBuilder::new(compound)
+                .density(density)
+                .friction(friction as Real)
+                .user_data(ColliderTag::Object.encode()),
+            Some(body),
+        );
+        self.object = Some(body);
+        body
+    }
+
+    /// Move the object to `pose`, at rest.
+    pub fn place_object(&mut self, pose: &Isometry3<f64>) {
+        if let Some(body) = self.object.and_then(|h| self.physics.bodies.get_mut(h)) {
+            body.set_position(to_pose(pose), true);
+            body.set_linvel(Vector::ZERO, true);
+            body.set_angvel(Vector::ZERO, true);
+        }
+    }
+
+    /// Pose of the object body.
+    pub fn object_pose(&self) -> Option<Isometry3<f64>> {
+        self.object
+            .map(|h| from_pose(self.physics.bodies[h].position()))
+    }
+
+    /// The deepest penetration (m, ≥ 0) of any contact involving the object right now.
+    pub fn object_penetration(&self) -> f64 {
+        let Some(body) = self.object.and_then(|h| self.physics.bodies.get(h)) else {
+            return 0.0;
+        };
+        let mut deepest: f64 = 0.0;
+        for &collider in body.colliders() {
+            for pair in self.physics.narrow_phase.contact_pairs_with(collider) {
+                if let PairContacts::Rigid(rigid) = &pair.contacts {
+                    for manifold in &rigid.manifolds {
+                        for point in &manifold.points {
+                            deepest = deepest.max(-(point.dist as f64));
+                        }
+                    }
+                }
+            }
+        }
+        deepest
+    }
+
+    /// Whether any collider of the given finger (pads included) touches the object.
+    pub fn finger_touches_object(&self, side: Side, pad_only: bool) -> bool {
+        self.arm.finger_colliders.iter().any(|(handle, tag)| {
+            let wanted = if pad_only {
+                *tag == ColliderTag::Pad(side)
+            } else {
+                tag.is_finger(side)
+            };
+            wanted
+                && self
+                    .physics
+                    .narrow_phase
+                    .contact_pairs_with(*handle)
+                    .any(|pair| {
+                        let other = if pair.collider1 == *handle {
+                            pair.collider2
+                        } else {
+                            pair.collider1
+                        };
+                        pair.has_any_active_contact()
+                            && ColliderTag::decode(self.physics.colliders[other].user_data)
+                                == Some(ColliderTag::Object)
+                    })
+        })
+    }
+}
+
+/// The fully open finger position (m), where every episode starts (arm-facts init_qpos).
+pub const FINGER_OPEN: f64 = 0.020833;
+
+fn coordinate_axis(kind: JointKind) -> usize {
+    match kind {
+        JointKind::Prismatic => 0, // LinX
+        JointKind::Revolute => 3,  // AngX
+    }
+}
+
+fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f64>) -> ArmHandles {
+    // Body poses at q = 0, from the joint origins.
+    let mut poses: Vec<Isometry3<f64>> = vec![*base; model.bodies.len()];
+    for joint in &model.joints {
+        poses[joint.child] = poses[joint.parent] * joint.origin;
+    }
+    let mut bodies = Vec::with_capacity(model.bodies.len());
+    let mut finger_colliders = Vec::new();
+    for (index, body) in model.bodies.iter().enumerate() {
+        let builder = if index == 0 {
+            RigidBodyBuilder::fixed()
+        } else {
+            RigidBodyBuilder::dynamic()
+        };
+        let inertia = nalgebra::Matrix3::<Real>::from_fn(|r, c| body.inertia[(r, c)] as Real);
+        let mut builder = builder.pose(to_pose(&poses[index])).can_sleep(false);
+        if index > 0 {
+            builder = builder.additional_mass_properties(MassProperties::with_inertia_matrix(
+                to_vec(&body.com),
+                body.mass as Real,
+                inertia.into(),
+            ));
+        }
+        let handle = physics.insert_body(builder);
+        for collision in &body.collisions {
+            let (shape, pose) = shape_of(collision);
+            let tag = tag_for(&collision.name, index);
+            let collider = ColliderBuilder::new(shape)
+                .position(pose)
+                .density(0.0)
+                .friction(if matches!(tag, ColliderTag::Arm(_)) {
+                    0.5
+                } else {
+                    1.0
+                })
+                .user_data(tag.encode());
+            let ch = physics.insert_collider(collider, Some(handle));
+            if matches!(tag, ColliderTag::Pad(_) | ColliderTag::Finger(_)) {
+                finger_colliders.push((ch, tag));
+            }
+        }
+        bodies.push(handle);
+    }
+    let mut joints = Vec::with_capacity(model.joints.len());
+    for joint in &model.joints {
+        let basis = Pose::from_rotation(GenericJoint::complete_ang_frame(to_vec(&joint.axis)));
+        let locked = match joint.kind {
+            JointKind::Revolute => JointAxesMask::LOCKED_REVOLUTE_AXES,
+            JointKind::Prismatic => JointAxesMask::LOCKED_PRISMATIC_AXES,
+        };
+        let axis = match joint.kind {
+            JointKind::Revolute => JointAxis::AngX,
+            JointKind::Prismatic => JointAxis::LinX,
+        };
+        let mut builder = GenericJointBuilder::new(locked)
+            .local_frame1(to_pose(&joint.origin) * basis)
+            .local_frame2(basis)
+            .motor_model(axis, MotorModel::ForceBased)
+            .contacts_enabled(false);
+        if let Some((lo, hi)) = joint.limits {
+            builder = builder.limits(axis, [lo as Real, hi as Real]);
+        }
+        let handle = physics
+            .insert_multibody_joint(bodies[joint.parent], bodies[joint.child], builder.build())
+            .unwrap_or_else(|| panic!("joint {} closes a loop", joint.name));
+        joints.push(handle);
+    }
+    assert_eq!(model.joints[ARM_DOF].name, FINGER_JOINTS[0]);
+    assert_eq!(model.joints[ARM_DOF + 1].name, FINGER_JOINTS[1]);
+    // Bodies moved by each arm joint: the child and everything below it.
+    let downstream = (0..ARM_DOF)
+        .map(|j| {
+            (0..model.bodies.len())
+                .filter(|&b| {
+                    let mut cur = b;
+                    loop {
+                        if cur == model.joints[j].child {
+                            return true;
+                        }
+                        match model.joints.iter().find(|jm| jm.child == cur) {
+                            Some(parent_joint) => cur = parent_joint.parent,
+                            None => return false,
+                        }
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    ArmHandles {
+        bodies,
+        joints,
+        finger_colliders,
+        grip_site: model.links[GRIP_SITE_LINK],
+        hand: model.links[HAND_LINK],
+        downstream,
+    }
+}
