@@ -513,11 +513,12 @@ fn each_arm_grasps_lifts_and_holds_the_box() {
         for _ in 0..10 {
             world.step_control();
         }
+        let contacts = world.finger_contacts();
         assert!(
-            world.finger_touches_object(composuite_core::physics::Side::Left, true)
-                && world.finger_touches_object(composuite_core::physics::Side::Right, true),
-            "{robot:?}: both pads should touch the box"
+            contacts.left_pad && contacts.right_pad,
+            "{robot:?}: both pads should touch the box: {contacts:?}"
         );
+        assert!(contacts.grasping(Object::Box));
         move_to(&mut world, &lifted, 1.5);
         let grip_start = world.grip_site_pose().inverse() * world.object_pose().unwrap();
         let mut deepest: f64 = 0.0;
@@ -529,6 +530,10 @@ fn each_arm_grasps_lifts_and_holds_the_box() {
         }
         let grip_end = world.grip_site_pose().inverse() * world.object_pose().unwrap();
         let slip = (grip_end.translation.vector - grip_start.translation.vector).norm();
+        assert!(
+            world.finger_contacts().grasping(Object::Box),
+            "{robot:?}: grasp lost while holding"
+        );
         let height = world.object_pose().unwrap().translation.z - box_z;
         eprintln!(
             "{robot:?}: lifted {height:.4} m, slip {:.2} mm, deepest contact {:.2} mm",
@@ -545,4 +550,31 @@ fn each_arm_grasps_lifts_and_holds_the_box() {
             "{robot:?}: a contact went {deepest} m deep"
         );
     }
+}
+
+#[test]
+fn the_grasp_rule_follows_the_reference() {
+    use composuite_core::physics::FingerContacts;
+    let only = |left_pad, right_pad, left_finger, right_finger| FingerContacts {
+        left_pad,
+        right_pad,
+        left_finger,
+        right_finger,
+    };
+    for object in [Object::Box, Object::HollowBox, Object::Dumbbell] {
+        assert!(only(true, true, true, true).grasping(object));
+        assert!(
+            !only(true, false, true, true).grasping(object),
+            "one pad is not a grasp"
+        );
+        assert!(
+            !only(false, false, true, true).grasping(object),
+            "finger bodies are not pads"
+        );
+    }
+    // The plate: a pad on one side and any part of the other finger.
+    assert!(only(true, false, true, true).grasping(Object::Plate));
+    assert!(only(false, true, true, false).grasping(Object::Plate));
+    assert!(!only(true, false, true, false).grasping(Object::Plate));
+    assert!(!only(false, false, true, true).grasping(Object::Plate));
 }

@@ -40,6 +40,32 @@ pub fn pad_gap(q_left: f64) -> f64 {
     0.0371 + 2.0 * q_left
 }
 
+/// Finger/object contacts at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FingerContacts {
+    /// The left pad touches the object.
+    pub left_pad: bool,
+    /// The right pad touches the object.
+    pub right_pad: bool,
+    /// Any part of the left finger (pad, tip, blade, knuckle) touches the object.
+    pub left_finger: bool,
+    /// Any part of the right finger touches the object.
+    pub right_finger: bool,
+}
+
+impl FingerContacts {
+    /// The benchmark's grasp test (composuite-facts §6): both pads touch the object; for the
+    /// plate, one pad and any part of the other finger suffice.
+    pub fn grasping(&self, object: Object) -> bool {
+        match object {
+            Object::Plate => {
+                (self.right_finger && self.left_pad) || (self.left_finger && self.right_pad)
+            }
+            Object::Box | Object::HollowBox | Object::Dumbbell => self.left_pad && self.right_pad,
+        }
+    }
+}
+
 /// Handles of one arm in the world.
 #[derive(Debug, Clone)]
 pub struct ArmHandles {
@@ -580,6 +606,16 @@ impl SimWorld {
             }
         }
         deepest
+    }
+
+    /// Which parts of the fingers touch the object now.
+    pub fn finger_contacts(&self) -> FingerContacts {
+        FingerContacts {
+            left_pad: self.finger_touches_object(Side::Left, true),
+            right_pad: self.finger_touches_object(Side::Right, true),
+            left_finger: self.finger_touches_object(Side::Left, false),
+            right_finger: self.finger_touches_object(Side::Right, false),
+        }
     }
 
     /// Whether any collider of the given finger (pads included) touches the object.
