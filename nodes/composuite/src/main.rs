@@ -1,6 +1,7 @@
 //! `composuite`: the user-facing command of CompoSuite-ROS. Subcommands grow with the suite;
-//! today it lists the 256 tasks.
+//! today it lists the 256 tasks and their reference splits, and times whole tasks.
 
+mod bench;
 mod tasks;
 
 use clap::{Parser, Subcommand};
@@ -17,12 +18,14 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     Tasks(tasks::TasksArgs),
+    Bench(bench::BenchArgs),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Tasks(args) => tasks::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     if let Err(message) = result {
         eprintln!("composuite: {message}");

@@ -9,7 +9,9 @@
 pub mod arena;
 pub mod axes;
 pub mod control;
+pub mod env;
 pub mod kinematics;
+pub mod obs;
 pub mod physics;
 pub mod reward;
 pub mod rng;

@@ -1,16 +1,15 @@
 //! The four arms with the gripper in rapier: URDF validity, kinematics against an independent
 //! chain, holding, tracking, limits under random commands, determinism.
 
+mod common;
+
 use std::collections::{HashMap, HashSet};
 
 use composuite_core::arena::{BIN1_POSITION, ROBOT_BASE_POSITION, arena_parts, object_geometry};
 use composuite_core::axes::{AxisElement, Robot};
 use composuite_core::axes::{Object, Objective, Obstacle};
 use composuite_core::control::{ArmCommandError, validate_arm_targets, validate_gripper_width};
-use composuite_core::kinematics::{IkTarget, frame_from_axes, solve_ik};
-use composuite_core::physics::{
-    ARM_DOF, GRIP_SITE_LINK, GripperCommand, PhysicsParams, SimWorld, robot_model,
-};
+use composuite_core::physics::{ARM_DOF, GripperCommand, PhysicsParams, SimWorld, robot_model};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 
@@ -442,14 +441,9 @@ fn same_inputs_give_bit_identical_states() {
     assert_eq!(run(), run());
 }
 
-/// Move the servo targets to `target` over `seconds` (smoothstep), control step by control step.
+/// Move the servo targets to `target` over `seconds`, control step by control step.
 fn move_to(world: &mut SimWorld, target: &[f64; ARM_DOF], seconds: f64) {
-    let start = world.arm_targets();
-    let steps = (seconds / 0.05).round() as usize;
-    for k in 1..=steps {
-        let s = k as f64 / steps as f64;
-        let s = s * s * (3.0 - 2.0 * s);
-        let q: [f64; ARM_DOF] = std::array::from_fn(|j| start[j] + (target[j] - start[j]) * s);
+    for q in common::path(&world.arm_targets(), target, seconds) {
         world.set_arm_targets(&q);
         world.step_control();
     }
@@ -462,9 +456,6 @@ fn move_to(world: &mut SimWorld, target: &[f64; ARM_DOF], seconds: f64) {
 fn each_arm_grasps_lifts_and_holds_the_box() {
     let box_z = object_geometry(Object::Box).spawn_z();
     let box_position = Vector3::new(BIN1_POSITION[0], BIN1_POSITION[1], box_z);
-    // The pads' centre is 6.6 mm above the grip site (arm-facts: pads span 0.0859..0.1189 from
-    // the mount, the grip site is at 0.109).
-    let pad_centre_above_grip_site = 0.109 - (0.0859 + 0.1189) / 2.0;
     for robot in Robot::all() {
         let mut world = SimWorld::new(robot, PhysicsParams::default());
         world.add_arena(&arena_parts(Objective::PickPlace, Obstacle::NoObstacle));
@@ -481,29 +472,20 @@ fn each_arm_grasps_lifts_and_holds_the_box() {
             "{robot:?}: box settled at {rest:?}"
         );
 
-        // Pointing down, keeping the finger axis's current heading.
-        let gripper = world.link_world_pose("gripper_base").unwrap();
-        let mut finger_axis = gripper.rotation * Vector3::y();
-        finger_axis.z = 0.0;
-        let orientation = frame_from_axes(-Vector3::z(), finger_axis)
-            * UnitQuaternion::from_euler_angles(0.0, 0.0, -std::f64::consts::FRAC_PI_2);
-        let ik = |height: f64, seed: &[f64; ARM_DOF]| {
-            let target = IkTarget {
-                position: box_position
-                    + Vector3::new(0.0, 0.0, height - pad_centre_above_grip_site),
-                orientation: Some(orientation),
-                orientation_weight: 0.5,
-            };
-            let r = solve_ik(world.model, GRIP_SITE_LINK, &target, seed, 300).unwrap();
-            assert!(
-                r.position_error < 1e-4 && r.orientation_error < 1e-3,
-                "{robot:?}: IK {r:?}"
-            );
-            r.q
-        };
-        let above = ik(0.12, &world.arm_positions());
-        let at = ik(0.0, &above);
-        let lifted = ik(0.15, &at);
+        let down = common::pointing_down(&world);
+        let above = common::pads_at(
+            &world,
+            box_position + Vector3::new(0.0, 0.0, 0.12),
+            down,
+            &world.arm_positions(),
+        );
+        let at = common::pads_at(&world, box_position, down, &above);
+        let lifted = common::pads_at(
+            &world,
+            box_position + Vector3::new(0.0, 0.0, 0.15),
+            down,
+            &at,
+        );
         move_to(&mut world, &above, 2.0);
         move_to(&mut world, &at, 1.5);
         world.set_gripper(GripperCommand::Width {

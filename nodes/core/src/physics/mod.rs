@@ -16,6 +16,6 @@ pub use robot_model::{
 };
 pub use tags::{ColliderTag, Side};
 pub use world::{
-    ARM_DOF, ArmHandles, FINGER_OPEN, FingerContacts, GripperCommand, SimWorld, from_pose, pad_gap,
-    to_pose,
+    ARM_DOF, ArmHandles, FINGER_OPEN, FingerContacts, GripperCommand, ServoMode, SimWorld,
+    from_pose, pad_gap, to_pose,
 };

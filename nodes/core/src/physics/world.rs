@@ -40,6 +40,23 @@ pub fn pad_gap(q_left: f64) -> f64 {
     0.0371 + 2.0 * q_left
 }
 
+/// How the arm's joint servos behave.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ServoMode {
+    /// Stiff position servos (the `ArmGains`), set points rate-limited by each joint's velocity
+    /// limit: how a real arm's driver tracks absolute position commands.
+    #[default]
+    Stiff,
+    /// The reference benchmark's joint controller (composuite-facts §4.2): a PD with kp 50 and
+    /// damping ratio 1 scaled by each joint's inertia (the diagonal of the joint-space mass
+    /// matrix, armature included), so agents trained on the reference see the same soft,
+    /// slow-settling response. No set-point rate limit (the reference has none).
+    Reference,
+}
+
+/// The reference's joint-controller stiffness (1/s²) and damping (1/s): kp 50, ζ = 1.
+const REFERENCE_KP: f64 = 50.0;
+
 /// Finger/object contacts at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct FingerContacts {
@@ -107,6 +124,11 @@ pub struct SimWorld {
     gripper_command: GripperCommand,
     /// The reference's internal gripper command c in [−1, 1].
     gripper_c: f64,
+    /// How the arm servos behave.
+    servo_mode: ServoMode,
+    /// The reference controller's gains for this control step (they follow the joint inertias,
+    /// which change slowly; recomputed once per control step).
+    reference_gains: ([f64; ARM_DOF], [f64; ARM_DOF]),
     /// The object body, if one was added.
     pub object: Option<RigidBodyHandle>,
     /// Physics steps taken.
@@ -235,6 +257,8 @@ impl SimWorld {
             setpoints: robot.init_qpos(),
             gripper_command: GripperCommand::Reference { action: 0.0 },
             gripper_c: 0.0,
+            servo_mode: ServoMode::Stiff,
+            reference_gains: ([0.0; ARM_DOF], [0.0; ARM_DOF]),
             object: None,
             steps: 0,
         };
@@ -379,6 +403,50 @@ impl SimWorld {
         self.arm_targets
     }
 
+    /// Switch the arm servos' behaviour.
+    pub fn set_servo_mode(&mut self, mode: ServoMode) {
+        if mode != self.servo_mode {
+            self.servo_mode = mode;
+            self.update_reference_gains();
+        }
+    }
+
+    fn update_reference_gains(&mut self) {
+        if self.servo_mode == ServoMode::Reference {
+            let m = self.joint_inertias();
+            let kd = 2.0 * REFERENCE_KP.sqrt();
+            self.reference_gains = (m.map(|m| REFERENCE_KP * m), m.map(|m| kd * m));
+        }
+    }
+
+    /// The current servo behaviour.
+    pub fn servo_mode(&self) -> ServoMode {
+        self.servo_mode
+    }
+
+    /// Each arm joint's inertia about its axis with the joints below it locked, plus its
+    /// armature (kg·m²): the diagonal of the joint-space mass matrix.
+    pub fn joint_inertias(&self) -> [f64; ARM_DOF] {
+        let bodies = &self.physics.bodies;
+        let mut inertia = [0.0; ARM_DOF];
+        for (j, joint) in self.model.joints.iter().enumerate().take(ARM_DOF) {
+            let frame = from_pose(bodies[self.arm.bodies[joint.child]].position());
+            let axis = frame.rotation * joint.axis;
+            let anchor = frame.translation.vector;
+            inertia[j] = self.gains.armature[j];
+            for &b in &self.arm.downstream[j] {
+                let model = &self.model.bodies[b];
+                let pose = from_pose(bodies[self.arm.bodies[b]].position());
+                let r = pose.rotation.to_rotation_matrix();
+                let world_inertia = r.matrix() * model.inertia * r.matrix().transpose();
+                let com = pose * nalgebra::Point3::from(model.com);
+                let arm = axis.cross(&(com.coords - anchor));
+                inertia[j] += axis.dot(&(world_inertia * axis)) + model.mass * arm.norm_squared();
+            }
+        }
+        inertia
+    }
+
     /// Command the gripper.
     pub fn set_gripper(&mut self, command: GripperCommand) {
         self.gripper_command = command;
@@ -413,8 +481,11 @@ impl SimWorld {
     fn update_servos(&mut self) {
         let tau_g = self.gravity_torques();
         let gripper_targets = self.finger_targets();
-        let gains = self.gains.clone();
-        let gripper = self.gripper.clone();
+        let (kp, kd): ([f64; ARM_DOF], [f64; ARM_DOF]) = match self.servo_mode {
+            ServoMode::Stiff => (self.gains.kp, self.gains.kd),
+            ServoMode::Reference => self.reference_gains,
+        };
+        let gripper = &self.gripper;
         let link_ids: Vec<usize> = (0..self.model.joints.len())
             .map(|j| self.link_id(j))
             .collect();
@@ -426,18 +497,21 @@ impl SimWorld {
         let dt = self.params.dt;
         for j in 0..ARM_DOF {
             let joint = &self.model.joints[j];
-            let max_step = joint.velocity * dt;
+            let max_step = match self.servo_mode {
+                ServoMode::Stiff => joint.velocity * dt,
+                ServoMode::Reference => f64::INFINITY,
+            };
             let step = (self.arm_targets[j] - self.setpoints[j]).clamp(-max_step, max_step);
             self.setpoints[j] += step;
             // Feed-forward gravity compensation through the servo's set point: at q = set point
             // the spring pushes exactly −τ_g.
-            let target = self.setpoints[j] - tau_g[j] / gains.kp[j];
+            let target = self.setpoints[j] - tau_g[j] / kp[j];
             let data = &mut mb.link_mut(link_ids[j]).expect("link").joint.data;
             data.set_motor_position(
                 JointAxis::AngX,
                 target as Real,
-                gains.kp[j] as Real,
-                gains.kd[j] as Real,
+                kp[j] as Real,
+                kd[j] as Real,
             );
             let effort = joint.effort;
             data.set_motor_max_force(JointAxis::AngX, effort as Real);
@@ -501,6 +575,7 @@ impl SimWorld {
 
     /// One control period (`substeps` physics steps).
     pub fn step_control(&mut self) {
+        self.update_reference_gains();
         for _ in 0..self.params.substeps {
             self.step();
         }

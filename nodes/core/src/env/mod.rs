@@ -1,0 +1,425 @@
+//! The in-process environment: one task, episodes of at most `horizon` control steps, factored
+//! observations, staged rewards. Tests, benchmarks and the ROS nodes all drive this one API.
+//!
+//! ```
+//! use composuite_core::env::{Action, Env, EnvConfig};
+//! let mut env = Env::new("IIWA/box/no_obstacle/pick_place".parse().unwrap(), EnvConfig::default());
+//! let obs = env.reset(7).unwrap();
+//! assert_eq!(obs.flat().len(), 93);
+//! let step = env.step(&Action::Reference([0.0; 8])).unwrap();
+//! assert!((0.0..=1.0).contains(&step.reward));
+//! ```
+
+mod action;
+mod reset;
+mod world_state;
+
+use std::fmt;
+
+use nalgebra::{Isometry3, Point3, UnitQuaternion};
+
+pub use action::Action;
+pub use reset::{MAX_SEED, sample_object_start};
+pub use world_state::WorldState;
+
+use crate::TaskSpec;
+use crate::arena::{Placed, arena_parts, goal_marker_parts, goal_position, obstacle_geometry};
+use crate::axes::Obstacle;
+use crate::control::{ArmCommandError, Clamped, GripperCommandError};
+use crate::obs::{GoalFactor, Observation, RelativePose, RobotFactor, TaskFactor, xyzw};
+use crate::physics::{ARM_DOF, FINGER_OPEN, PhysicsParams, ServoMode, SimWorld};
+use crate::reward::{StagedReward, Termination, WorldSnapshot, staged_reward, termination};
+
+/// Settings of an environment; start from `EnvConfig::default()` and change fields with the
+/// builder methods.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvConfig {
+    /// Episode length limit in control steps (the reference's training loop cuts at 500).
+    pub horizon: u32,
+    /// Whether the flat observation includes the task one-hots (93 values) or not (77).
+    pub task_observation: bool,
+    /// Physics settings (2 ms steps, 25 per control step by default).
+    pub physics: PhysicsParams,
+}
+
+impl Default for EnvConfig {
+    fn default() -> Self {
+        EnvConfig {
+            horizon: 500,
+            task_observation: true,
+            physics: PhysicsParams::default(),
+        }
+    }
+}
+
+impl EnvConfig {
+    /// Set the horizon (control steps).
+    #[must_use]
+    pub fn horizon(mut self, horizon: u32) -> Self {
+        self.horizon = horizon;
+        self
+    }
+
+    /// Include the task one-hots in the flat observation or not.
+    #[must_use]
+    pub fn task_observation(mut self, on: bool) -> Self {
+        self.task_observation = on;
+        self
+    }
+
+    /// Control period (s): physics step × substeps.
+    pub fn control_period(&self) -> f64 {
+        self.physics.dt * self.physics.substeps as f64
+    }
+}
+
+/// Why a reset or step was refused. The environment is unchanged when one is returned.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EnvError {
+    /// `step` before the first `reset`.
+    NotReset,
+    /// `step` after the episode ended (terminated or truncated); reset first.
+    EpisodeOver {
+        /// The episode that ended.
+        episode: u32,
+        /// Steps it ran.
+        steps: u32,
+    },
+    /// A seed the reference's numpy seeding cannot take.
+    BadSeed(u64),
+    /// The start sampler found no position clear of the obstacle (as the reference would fail).
+    NoClearStart {
+        /// The seed.
+        seed: u64,
+    },
+    /// A bad arm command.
+    Arm(ArmCommandError),
+    /// A bad gripper command.
+    Gripper(GripperCommandError),
+    /// A reference action with a NaN or infinite component.
+    BadReferenceAction {
+        /// Index of the component (0–7).
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+}
+
+impl fmt::Display for EnvError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EnvError::NotReset => write!(f, "step before the first reset; call reset(seed) first"),
+            EnvError::EpisodeOver { episode, steps } => {
+                write!(
+                    f,
+                    "episode {episode} is over (ended after {steps} steps); call reset(seed) to start another"
+                )
+            }
+            EnvError::BadSeed(seed) => write!(
+                f,
+                "seed {seed} is out of range; valid seeds are 0..={MAX_SEED} (numpy's)"
+            ),
+            EnvError::NoClearStart { seed } => {
+                write!(
+                    f,
+                    "seed {seed}: no object start clear of the obstacle in {} draws",
+                    crate::arena::PLACEMENT_ATTEMPTS
+                )
+            }
+            EnvError::Arm(e) => write!(f, "{e}"),
+            EnvError::Gripper(e) => write!(f, "{e}"),
+            EnvError::BadReferenceAction { index, value } => write!(
+                f,
+                "action[{index}] is {value}; reference actions are 8 finite numbers in [-1, 1] \
+                 (7 joint deltas, then the gripper)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for EnvError {}
+
+/// What a step returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    /// The observation after the step.
+    pub observation: Observation,
+    /// The reward (1 on success, else the best stage value).
+    pub reward: f64,
+    /// The objective's own termination ended the episode (Push: object lifted).
+    pub terminated: bool,
+    /// The horizon ended the episode.
+    pub truncated: bool,
+    /// Every stage's value, success, and what was clamped.
+    pub info: StepInfo,
+}
+
+/// Details of a step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepInfo {
+    /// The staged reward, every stage exposed.
+    pub staged: StagedReward,
+    /// Whether the objective's success test holds (reward = 1).
+    pub success: bool,
+    /// Why the episode terminated, if it did.
+    pub termination: Option<Termination>,
+    /// Targets that were outside the limits and were clamped.
+    pub clamped: Vec<Clamped>,
+}
+
+/// Where the episode stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    NotReset,
+    Running,
+    Over { terminated: bool, truncated: bool },
+}
+
+/// One task's environment.
+pub struct Env {
+    task: TaskSpec,
+    config: EnvConfig,
+    world: SimWorld,
+    phase: Phase,
+    episode: u32,
+    step: u32,
+    seed: u64,
+    object_start: Point3<f64>,
+    goal: Point3<f64>,
+    last_gripper_action: f64,
+    episode_return: f64,
+    success_seen: bool,
+}
+
+impl Env {
+    /// The environment of `task`; call [`Env::reset`] before stepping.
+    pub fn new(task: TaskSpec, config: EnvConfig) -> Env {
+        let goal = goal_position(task.objective, task.object);
+        let world = build_world(&task, &config, &Isometry3::translation(0.0, 0.0, -10.0));
+        Env {
+            task,
+            config,
+            world,
+            phase: Phase::NotReset,
+            episode: 0,
+            step: 0,
+            seed: 0,
+            object_start: Point3::origin(),
+            goal,
+            last_gripper_action: 0.0,
+            episode_return: 0.0,
+            success_seen: false,
+        }
+    }
+
+    /// Start an episode: the arm at its initial pose with the gripper open, the object at the
+    /// start the reference draws for `seed` (numpy seeding, composuite-facts §2.2 and §7.3).
+    /// The physics is rebuilt, so an episode depends only on its seed and actions.
+    pub fn reset(&mut self, seed: u64) -> Result<Observation, EnvError> {
+        let start = sample_object_start(self.task.obstacle, self.task.object, seed)?;
+        self.world = build_world(
+            &self.task,
+            &self.config,
+            &Isometry3::translation(start.x, start.y, start.z),
+        );
+        self.phase = Phase::Running;
+        self.episode += 1;
+        self.step = 0;
+        self.seed = seed;
+        self.object_start = start;
+        self.last_gripper_action = 0.0;
+        self.episode_return = 0.0;
+        self.success_seen = false;
+        Ok(self.observation())
+    }
+
+    /// Advance one control period with `action`. Refused (nothing changes) after the episode
+    /// ended, before the first reset, or for an invalid action.
+    pub fn step(&mut self, action: &Action) -> Result<Step, EnvError> {
+        match self.phase {
+            Phase::NotReset => return Err(EnvError::NotReset),
+            Phase::Over { .. } => {
+                return Err(EnvError::EpisodeOver {
+                    episode: self.episode,
+                    steps: self.step,
+                });
+            }
+            Phase::Running => {}
+        }
+        let clamped = action.apply(&mut self.world, &mut self.last_gripper_action)?;
+        self.world.step_control();
+        self.step += 1;
+        let snapshot = self.snapshot();
+        let staged = staged_reward(self.task.objective, self.task.object, &snapshot);
+        let termination = termination(self.task.objective, &snapshot);
+        let terminated = termination.is_some();
+        let truncated = !terminated && self.step >= self.config.horizon;
+        if terminated || truncated {
+            self.phase = Phase::Over {
+                terminated,
+                truncated,
+            };
+        }
+        self.episode_return += staged.total;
+        self.success_seen |= staged.success;
+        Ok(Step {
+            observation: self.observation(),
+            reward: staged.total,
+            terminated,
+            truncated,
+            info: StepInfo {
+                success: staged.success,
+                staged,
+                termination,
+                clamped,
+            },
+        })
+    }
+
+    /// The current observation.
+    pub fn observation(&self) -> Observation {
+        let w = &self.world;
+        let eef = self.eef_frame();
+        let object = w.object_pose().expect("the env always has an object");
+        let object_position = Point3::from(object.translation.vector);
+        let obstacle = match self.task.obstacle {
+            Obstacle::NoObstacle => RelativePose::absent(&eef),
+            other => {
+                let pose = obstacle_geometry(other).body_pose();
+                RelativePose::new(Point3::from(pose.translation.vector), pose.rotation, &eef)
+            }
+        };
+        let q = w.arm_positions();
+        let fingers = w.finger_positions();
+        Observation {
+            object: RelativePose::new(object_position, object.rotation, &eef),
+            obstacle,
+            goal: GoalFactor::new(self.goal, object_position, &eef),
+            task: TaskFactor::of(&self.task),
+            robot: RobotFactor {
+                joint_pos_cos: q.map(f64::cos),
+                joint_pos_sin: q.map(f64::sin),
+                joint_vel: w.arm_velocities(),
+                eef_position: eef.translation.vector.into(),
+                eef_orientation: xyzw(&eef.rotation),
+                gripper_qpos: fingers,
+                gripper_qvel: [w.joint_velocity(ARM_DOF), w.joint_velocity(ARM_DOF + 1)],
+            },
+            includes_task: self.config.task_observation,
+        }
+    }
+
+    /// The reference's end-effector frame: grip-site position, hand orientation.
+    fn eef_frame(&self) -> Isometry3<f64> {
+        let grip = self.world.grip_site_pose();
+        Isometry3::from_parts(grip.translation, self.world.hand_pose().rotation)
+    }
+
+    fn snapshot(&self) -> WorldSnapshot {
+        let eef = self.eef_frame();
+        let object = self.world.object_pose().expect("object");
+        WorldSnapshot {
+            object_position: Point3::from(object.translation.vector),
+            grip_site_position: Point3::from(eef.translation.vector),
+            hand_z_axis: eef.rotation * nalgebra::Vector3::z(),
+            grasping: self.world.finger_contacts().grasping(self.task.object),
+            last_gripper_action: self.last_gripper_action,
+        }
+    }
+
+    /// Privileged ground truth (what the reward needs and agents do not observe).
+    pub fn world_state(&self) -> WorldState {
+        WorldState::read(
+            &self.world,
+            self.task.object,
+            &self.eef_frame(),
+            self.last_gripper_action,
+        )
+    }
+
+    /// The task.
+    pub fn task(&self) -> TaskSpec {
+        self.task
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &EnvConfig {
+        &self.config
+    }
+
+    /// Episode counter (1 for the first episode; 0 before any reset).
+    pub fn episode(&self) -> u32 {
+        self.episode
+    }
+
+    /// Control steps taken in this episode.
+    pub fn steps(&self) -> u32 {
+        self.step
+    }
+
+    /// The seed of this episode.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// Whether the episode ended (and how): `Some((terminated, truncated))`.
+    pub fn ended(&self) -> Option<(bool, bool)> {
+        match self.phase {
+            Phase::Over {
+                terminated,
+                truncated,
+            } => Some((terminated, truncated)),
+            _ => None,
+        }
+    }
+
+    /// Sum of the rewards of this episode.
+    pub fn episode_return(&self) -> f64 {
+        self.episode_return
+    }
+
+    /// Whether any step of this episode succeeded.
+    pub fn success_seen(&self) -> bool {
+        self.success_seen
+    }
+
+    /// Where the object started this episode.
+    pub fn object_start(&self) -> Point3<f64> {
+        self.object_start
+    }
+
+    /// The goal marker's position.
+    pub fn goal(&self) -> Point3<f64> {
+        self.goal
+    }
+
+    /// Every static solid, the object at its start pose, and the goal marker, in the world.
+    pub fn scene_parts(&self) -> Vec<Placed> {
+        let mut parts = arena_parts(self.task.objective, self.task.obstacle);
+        let start = Isometry3::from_parts(self.object_start.into(), UnitQuaternion::identity());
+        parts.extend(
+            crate::arena::object_parts(self.task.object)
+                .into_iter()
+                .map(|p| Placed {
+                    pose: start * p.pose,
+                    ..p
+                }),
+        );
+        parts.extend(goal_marker_parts(self.task.objective, self.task.object));
+        parts
+    }
+
+    /// The simulated world (read only; commands go through [`Env::step`]).
+    pub fn world(&self) -> &SimWorld {
+        &self.world
+    }
+}
+
+fn build_world(task: &TaskSpec, config: &EnvConfig, object_pose: &Isometry3<f64>) -> SimWorld {
+    let mut world = SimWorld::new(task.robot, config.physics.clone());
+    world.add_arena(&arena_parts(task.objective, task.obstacle));
+    world.add_object(task.object, object_pose);
+    world.reset_arm(&task.robot.init_qpos(), FINGER_OPEN);
+    world.set_servo_mode(ServoMode::Stiff);
+    world
+}
