@@ -307,3 +307,37 @@ fn help_shows_a_split_example() {
     );
     assert!(text.contains("--element <E>"), "{text}");
 }
+
+#[test]
+fn bench_reports_each_task_as_json() {
+    let out = composuite(&[
+        "bench",
+        "--tasks",
+        "Panda/box/no_obstacle/push",
+        "Kinova3/Plate/None/Shelf",
+        "--steps",
+        "30",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[1]["task"], "Gen3/plate/no_obstacle/shelf");
+    for row in rows {
+        assert!(row["steps_per_s"].as_f64().unwrap() > 0.0);
+        assert!(row["reset_us"].as_f64().unwrap() > 0.0);
+        assert!(row["rss_mb"].as_f64().unwrap() > 0.0);
+    }
+}
+
+#[test]
+fn bench_names_a_bad_task() {
+    let out = composuite(&["bench", "--tasks", "IIWA/box/wall/push"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown obstacle \"wall\""));
+}

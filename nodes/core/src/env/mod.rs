@@ -179,6 +179,8 @@ enum Phase {
 pub struct Env {
     task: TaskSpec,
     config: EnvConfig,
+    /// The task's world as built, never stepped: every reset starts from a copy of it.
+    template: SimWorld,
     world: SimWorld,
     phase: Phase,
     episode: u32,
@@ -195,11 +197,13 @@ impl Env {
     /// The environment of `task`; call [`Env::reset`] before stepping.
     pub fn new(task: TaskSpec, config: EnvConfig) -> Env {
         let goal = goal_position(task.objective, task.object);
-        let world = build_world(&task, &config, &Isometry3::translation(0.0, 0.0, -10.0));
+        // The object waits below the floor until the first reset places it.
+        let template = build_world(&task, &config, &Isometry3::translation(0.0, 0.0, -10.0));
         Env {
             task,
             config,
-            world,
+            world: template.fresh_copy(),
+            template,
             phase: Phase::NotReset,
             episode: 0,
             step: 0,
@@ -214,14 +218,13 @@ impl Env {
 
     /// Start an episode: the arm at its initial pose with the gripper open, the object at the
     /// start the reference draws for `seed` (numpy seeding, composuite-facts §2.2 and §7.3).
-    /// The physics is rebuilt, so an episode depends only on its seed and actions.
+    /// The physics starts from a fresh copy of the task's world, so an episode depends only on
+    /// its seed and actions.
     pub fn reset(&mut self, seed: u64) -> Result<Observation, EnvError> {
         let start = sample_object_start(self.task.obstacle, self.task.object, seed)?;
-        self.world = build_world(
-            &self.task,
-            &self.config,
-            &Isometry3::translation(start.x, start.y, start.z),
-        );
+        self.world = self.template.fresh_copy();
+        self.world
+            .place_object(&Isometry3::translation(start.x, start.y, start.z));
         self.phase = Phase::Running;
         self.episode += 1;
         self.step = 0;

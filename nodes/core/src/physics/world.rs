@@ -683,6 +683,44 @@ impl SimWorld {
         deepest
     }
 
+    /// A copy of a world that has not been stepped yet, as if built afresh: the rapier sets are
+    /// cloned, the pipeline and solver workspaces start empty. Much cheaper than building
+    /// (no URDF merging, no shape or mass computations), and just as history-free.
+    pub fn fresh_copy(&self) -> SimWorld {
+        assert_eq!(
+            self.steps, 0,
+            "fresh_copy is for worlds that have not been stepped"
+        );
+        let p = &self.physics;
+        let mut physics = PhysicsWorld::new();
+        physics.gravity = p.gravity;
+        physics.integration_parameters = p.integration_parameters;
+        physics.islands = p.islands.clone();
+        physics.broad_phase = p.broad_phase.clone();
+        physics.narrow_phase = p.narrow_phase.clone();
+        physics.bodies = p.bodies.clone();
+        physics.colliders = p.colliders.clone();
+        physics.impulse_joints = p.impulse_joints.clone();
+        physics.multibody_joints = p.multibody_joints.clone();
+        SimWorld {
+            physics,
+            robot: self.robot,
+            model: self.model,
+            arm: self.arm.clone(),
+            gains: self.gains.clone(),
+            gripper: self.gripper.clone(),
+            params: self.params.clone(),
+            arm_targets: self.arm_targets,
+            setpoints: self.setpoints,
+            gripper_command: self.gripper_command,
+            gripper_c: self.gripper_c,
+            servo_mode: self.servo_mode,
+            reference_gains: self.reference_gains,
+            object: self.object,
+            steps: 0,
+        }
+    }
+
     /// Which parts of the fingers touch the object now.
     pub fn finger_contacts(&self) -> FingerContacts {
         FingerContacts {
