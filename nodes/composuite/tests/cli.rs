@@ -11,9 +11,7 @@ fn composuite(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn tasks_json_lists_all_256_in_order() {
-    let out = composuite(&["tasks", "--json"]);
-    assert!(out.status.success());
-    let value: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let value = json_of(&["tasks", "--json"]);
     let tasks = value["tasks"].as_array().unwrap();
     assert_eq!(tasks.len(), 256);
     assert_eq!(tasks[0]["task"], "IIWA/box/no_obstacle/pick_place");
@@ -26,7 +24,7 @@ fn tasks_json_lists_all_256_in_order() {
 
 #[test]
 fn filters_accept_reference_spellings() {
-    let out = composuite(&[
+    let value = json_of(&[
         "tasks",
         "--robot",
         "Kinova3",
@@ -36,8 +34,6 @@ fn filters_accept_reference_spellings() {
         "Trashcan",
         "--json",
     ]);
-    assert!(out.status.success());
-    let value: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let names: Vec<&str> = value["tasks"]
         .as_array()
         .unwrap()
@@ -68,14 +64,19 @@ fn a_bad_filter_is_a_clear_error() {
     assert!(out.stdout.is_empty());
 }
 
-fn split_json(args: &[&str]) -> (Vec<String>, Vec<String>) {
+/// Run a command that must succeed and print JSON; its parsed output.
+fn json_of(args: &[&str]) -> serde_json::Value {
     let out = composuite(args);
     assert!(
         out.status.success(),
-        "{}",
+        "composuite {args:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let value: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn split_json(args: &[&str]) -> (Vec<String>, Vec<String>) {
+    let value = json_of(args);
     let object = value.as_object().unwrap();
     assert_eq!(object.keys().collect::<Vec<_>>(), ["test", "train"]);
     let list = |key: &str| -> Vec<String> {
@@ -310,7 +311,7 @@ fn help_shows_a_split_example() {
 
 #[test]
 fn bench_reports_each_task_as_json() {
-    let out = composuite(&[
+    let rows = json_of(&[
         "bench",
         "--tasks",
         "Panda/box/no_obstacle/push",
@@ -319,12 +320,6 @@ fn bench_reports_each_task_as_json() {
         "30",
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 2);
     assert_eq!(rows[1]["task"], "Gen3/plate/no_obstacle/shelf");
