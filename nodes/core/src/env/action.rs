@@ -24,7 +24,7 @@ pub enum Action {
         gripper: Option<(f64, f64)>,
     },
     /// The reference's 8 numbers in [−1, 1]: joint goal = measured q + 0.05·a[0..7], and the
-    /// sign of a[7] moves the gripper (+ close, − open), with the reference's soft controller.
+    /// sign of `a[7]` moves the gripper (+ close, − open), with the reference's soft controller.
     Reference([f64; 8]),
 }
 
