@@ -1,0 +1,11 @@
+//! ROS plumbing for the CompoSuite-ROS nodes: everything between the ROS-free core and the wire.
+//!
+//! - [`convert`]: core types to `composuite_msgs` and standard messages, and incoming commands
+//!   back (by joint name, with errors that name what is valid);
+//! - [`names`]: the topic and service names, relative so a namespace can hold one environment;
+//! - [`ros_args`]: the `--ros-args` command line every ROS 2 node accepts.
+#![warn(missing_docs)]
+
+pub mod convert;
+pub mod names;
+pub mod ros_args;

@@ -1,0 +1,31 @@
+//! Topic and service names, relative (no leading `/`) so a launch can put each environment
+//! in its own namespace (`/env_00/joint_states`, ...). DESIGN.md's interface table.
+
+/// Arm and finger joint states (sensor_msgs/JointState), sim → agents.
+pub const JOINT_STATES: &str = "joint_states";
+/// Absolute joint position targets by name (sensor_msgs/JointState), agents → sim.
+pub const JOINT_COMMAND: &str = "joint_command";
+/// Gripper opening and effort (control_msgs/GripperCommand), agents → sim.
+pub const GRIPPER_COMMAND: &str = "gripper_command";
+/// Factored observation (composuite_msgs/Observation), sim → agents.
+pub const OBSERVATION: &str = "observation";
+/// Privileged truth (composuite_msgs/WorldState), sim → reward.
+pub const WORLD_STATE: &str = "world_state";
+/// The composed scene, transient local (composuite_msgs/Scene), task_manager → all.
+pub const SCENE: &str = "scene";
+/// Staged reward (composuite_msgs/StagedReward), reward → agents.
+pub const REWARD: &str = "reward";
+/// Success flag (std_msgs/Bool), reward → agents.
+pub const SUCCESS: &str = "success";
+/// Episode progress (composuite_msgs/EpisodeStatus), task_manager → agents.
+pub const EPISODE: &str = "episode";
+/// Sim time (rosgraph_msgs/Clock), sim → all.
+pub const CLOCK: &str = "clock";
+/// Service: choose the task.
+pub const SET_TASK: &str = "set_task";
+/// Service: start an episode.
+pub const RESET: &str = "reset";
+/// Service: reference-identical task splits.
+pub const SAMPLE_TASKS: &str = "sample_tasks";
+/// The world frame every pose is expressed in.
+pub const WORLD_FRAME: &str = "world";
