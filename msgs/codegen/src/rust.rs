@@ -229,6 +229,11 @@ fn emit_message(out: &mut String, registry: &Registry, msg: &MessageSpec) {
         out.push_str("}\n\n");
     }
 
+    writeln!(
+        out,
+        "#[cfg(feature = \"ros2-client\")]\nimpl ::ros2_client::Message for {rust_name} {{}}\n"
+    )
+    .unwrap();
     writeln!(out, "impl crate::RosMessage for {rust_name} {{").unwrap();
     writeln!(
         out,

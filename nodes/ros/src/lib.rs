@@ -3,9 +3,13 @@
 //! - [`convert`]: core types to `composuite_msgs` and standard messages, and incoming commands
 //!   back (by joint name, with errors that name what is valid);
 //! - [`names`]: the topic and service names, relative so a namespace can hold one environment;
-//! - [`ros_args`]: the `--ros-args` command line every ROS 2 node accepts.
+//! - [`ros_args`]: the `--ros-args` command line every ROS 2 node accepts;
+//! - [`qos`]: the QoS profile of each kind of topic;
+//! - [`environment`]: `ROS_DOMAIN_ID` and the discovery range, which ros2-client does not read.
 #![warn(missing_docs)]
 
 pub mod convert;
+pub mod environment;
 pub mod names;
+pub mod qos;
 pub mod ros_args;

@@ -192,3 +192,61 @@ fn bad_ros_args_say_what_is_valid() {
     assert!(err("--ros-args --frobnicate").contains("unknown --ros-args option `--frobnicate`"));
     assert!(err("--ros-args -r a-b:=c").contains("not a valid ROS name"));
 }
+
+#[test]
+fn ros_environment_is_read_and_checked() {
+    use composuite_ros::environment::{DiscoveryRange, RosEnvironment};
+    let env = |pairs: &'static [(&'static str, &'static str)]| {
+        move |k: &str| {
+            pairs
+                .iter()
+                .find(|(n, _)| *n == k)
+                .map(|(_, v)| v.to_string())
+        }
+    };
+    let d = RosEnvironment::read(env(&[])).unwrap();
+    assert_eq!(
+        (d.domain_id, d.discovery_range),
+        (0, DiscoveryRange::Subnet)
+    );
+    let d = RosEnvironment::read(env(&[
+        ("ROS_DOMAIN_ID", "42"),
+        ("ROS_AUTOMATIC_DISCOVERY_RANGE", "localhost"),
+    ]))
+    .unwrap();
+    assert_eq!(
+        (d.domain_id, d.discovery_range),
+        (42, DiscoveryRange::Localhost)
+    );
+    let d = RosEnvironment::read(env(&[("ROS_LOCALHOST_ONLY", "1")])).unwrap();
+    assert_eq!(d.discovery_range, DiscoveryRange::Localhost);
+    let e = RosEnvironment::read(env(&[("ROS_DOMAIN_ID", "300")])).unwrap_err();
+    assert!(e.to_string().contains("valid: 0..=232"), "{e}");
+    let e = RosEnvironment::read(env(&[("ROS_AUTOMATIC_DISCOVERY_RANGE", "LAN")])).unwrap_err();
+    assert!(
+        e.to_string().contains("valid: OFF, LOCALHOST, SUBNET"),
+        "{e}"
+    );
+}
+
+#[test]
+fn qos_profiles_follow_ros_defaults() {
+    use composuite_ros::qos;
+    use ros2_client::qos::{Durability, History, Reliability};
+    assert!(matches!(
+        qos::state().reliability,
+        Reliability::Reliable { .. }
+    ));
+    assert_eq!(qos::state().durability, Durability::Volatile);
+    assert_eq!(qos::state().history, History::KeepLast { depth: 10 });
+    assert_eq!(qos::latched().durability, Durability::TransientLocal);
+    assert_eq!(qos::latched().history, History::KeepLast { depth: 1 });
+    assert_eq!(qos::clock().reliability, Reliability::BestEffort);
+    for profile in [qos::state(), qos::latched(), qos::clock(), qos::services()] {
+        assert_ne!(
+            profile.history,
+            History::KeepAll,
+            "KeepAll readers drop data in ros2-client"
+        );
+    }
+}
