@@ -10,6 +10,7 @@ pub mod arena;
 pub mod axes;
 pub mod control;
 pub mod env;
+pub mod expert;
 pub mod kinematics;
 pub mod obs;
 pub mod physics;
