@@ -2,6 +2,7 @@
 //! today it lists the 256 tasks and their reference splits, and times whole tasks.
 
 mod bench;
+mod expert;
 mod tasks;
 
 use clap::{Parser, Subcommand};
@@ -19,6 +20,7 @@ struct Cli {
 enum Command {
     Tasks(tasks::TasksArgs),
     Bench(bench::BenchArgs),
+    Expert(expert::ExpertArgs),
 }
 
 fn main() {
@@ -26,6 +28,7 @@ fn main() {
     let result = match cli.command {
         Command::Tasks(args) => tasks::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Expert(args) => expert::run(&args),
     };
     if let Err(message) = result {
         eprintln!("composuite: {message}");

@@ -336,3 +336,51 @@ fn bench_names_a_bad_task() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown obstacle \"wall\""));
 }
+
+#[test]
+fn expert_writes_its_table_csv_and_heatmap() {
+    let out_dir = std::env::temp_dir().join(format!("composuite-expert-{}", std::process::id()));
+    let value = json_of(&[
+        "expert",
+        "--tasks",
+        "IIWA/box/no_obstacle/pick_place",
+        "Gen3/box/no_obstacle/trash_can",
+        "--episodes",
+        "1",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--json",
+    ]);
+    let tasks = value["tasks"].as_array().unwrap();
+    assert_eq!(tasks.len(), 2);
+    assert_eq!(tasks[0]["task"], "IIWA/box/no_obstacle/pick_place");
+    assert_eq!(
+        tasks[0]["success_rate"], 1.0,
+        "the expert solves this task on seed 0"
+    );
+    assert!(value["mean_success"].as_f64().unwrap() > 0.0);
+    let csv = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3);
+    assert!(csv.starts_with("task,robot,object,obstacle,objective,episodes,success_rate"));
+    let png = std::fs::read(out_dir.join("success.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let summary = std::fs::read_to_string(out_dir.join("summary.txt")).unwrap();
+    assert!(
+        summary.contains("by objective: pick_place 1.00, trash_can"),
+        "{summary}"
+    );
+    std::fs::remove_dir_all(out_dir).unwrap();
+}
+
+#[test]
+fn expert_refuses_an_empty_selection() {
+    let out = composuite(&[
+        "expert",
+        "--tasks",
+        "IIWA/box/no_obstacle/push",
+        "--objective",
+        "shelf",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no task matches"));
+}
