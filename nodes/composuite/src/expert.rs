@@ -7,7 +7,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use clap::Args;
-use composuite_core::axes::{AxisElement, Object, Objective, Obstacle, Robot};
+use composuite_core::axes::AxisElement;
 use composuite_core::expert::{EpisodeOutcome, run_episode};
 use composuite_core::{TaskSpec, all_tasks};
 use serde_json::json;
@@ -78,14 +78,6 @@ impl TaskResult {
     }
 }
 
-fn filter<E: AxisElement>(value: &Option<String>) -> Result<Option<E>, String> {
-    value
-        .as_deref()
-        .map(E::parse)
-        .transpose()
-        .map_err(|e| e.to_string())
-}
-
 fn selected_tasks(args: &ExpertArgs) -> Result<Vec<TaskSpec>, String> {
     let explicit: Vec<&String> = args.tasks.iter().filter(|t| t.as_str() != "all").collect();
     let base: Vec<TaskSpec> = if explicit.is_empty() {
@@ -96,17 +88,13 @@ fn selected_tasks(args: &ExpertArgs) -> Result<Vec<TaskSpec>, String> {
             .map(|t| t.parse::<TaskSpec>().map_err(|e| e.to_string()))
             .collect::<Result<_, _>>()?
     };
-    let robot = filter::<Robot>(&args.robot)?;
-    let object = filter::<Object>(&args.object)?;
-    let obstacle = filter::<Obstacle>(&args.obstacle)?;
-    let objective = filter::<Objective>(&args.objective)?;
-    let tasks: Vec<TaskSpec> = base
-        .into_iter()
-        .filter(|t| robot.is_none_or(|r| t.robot == r))
-        .filter(|t| object.is_none_or(|o| t.object == o))
-        .filter(|t| obstacle.is_none_or(|o| t.obstacle == o))
-        .filter(|t| objective.is_none_or(|o| t.objective == o))
-        .collect();
+    let tasks = crate::tasks::filter_tasks(
+        base,
+        &args.robot,
+        &args.object,
+        &args.obstacle,
+        &args.objective,
+    )?;
     if tasks.is_empty() {
         return Err("no task matches the given --tasks and axis filters".into());
     }

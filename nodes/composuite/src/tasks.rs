@@ -69,22 +69,40 @@ fn parse_filter<E: AxisElement>(value: &Option<String>) -> Result<Option<E>, Str
         .map_err(|e| e.to_string())
 }
 
-/// Run the subcommand.
-pub fn run(args: &TasksArgs) -> Result<(), String> {
-    if let Some(experiment) = &args.split {
-        return run_split(args, experiment);
-    }
-    let robot = parse_filter::<Robot>(&args.robot)?;
-    let object = parse_filter::<Object>(&args.object)?;
-    let obstacle = parse_filter::<Obstacle>(&args.obstacle)?;
-    let objective = parse_filter::<Objective>(&args.objective)?;
-    let tasks: Vec<TaskSpec> = all_tasks()
+/// Keep the tasks whose elements match the given per-axis filters (any accepted spelling;
+/// `None` keeps every element of that axis). Shared by the subcommands that select tasks.
+pub fn filter_tasks(
+    tasks: Vec<TaskSpec>,
+    robot: &Option<String>,
+    object: &Option<String>,
+    obstacle: &Option<String>,
+    objective: &Option<String>,
+) -> Result<Vec<TaskSpec>, String> {
+    let robot = parse_filter::<Robot>(robot)?;
+    let object = parse_filter::<Object>(object)?;
+    let obstacle = parse_filter::<Obstacle>(obstacle)?;
+    let objective = parse_filter::<Objective>(objective)?;
+    Ok(tasks
         .into_iter()
         .filter(|t| robot.is_none_or(|r| t.robot == r))
         .filter(|t| object.is_none_or(|o| t.object == o))
         .filter(|t| obstacle.is_none_or(|o| t.obstacle == o))
         .filter(|t| objective.is_none_or(|o| t.objective == o))
-        .collect();
+        .collect())
+}
+
+/// Run the subcommand.
+pub fn run(args: &TasksArgs) -> Result<(), String> {
+    if let Some(experiment) = &args.split {
+        return run_split(args, experiment);
+    }
+    let tasks = filter_tasks(
+        all_tasks(),
+        &args.robot,
+        &args.object,
+        &args.obstacle,
+        &args.objective,
+    )?;
     if args.json {
         let rows: Vec<_> = tasks
             .iter()
