@@ -98,6 +98,8 @@ pub struct ArmHandles {
     pub hand: (usize, Isometry3<f64>),
     /// For each arm joint, which bodies move with it (for gravity compensation).
     pub downstream: Vec<Vec<usize>>,
+    /// The multibody link id of each model joint (stable: links are never removed).
+    pub link_ids: Vec<usize>,
 }
 
 /// The simulated world: rapier sets plus the arm's handles and command state.
@@ -304,11 +306,7 @@ impl SimWorld {
 
     /// The multibody link id of model joint `j`.
     fn link_id(&self, j: usize) -> usize {
-        self.physics
-            .multibody_joints
-            .get(self.arm.joints[j])
-            .expect("joint")
-            .1
+        self.arm.link_ids[j]
     }
 
     fn multibody(&self) -> &Multibody {
@@ -357,7 +355,7 @@ impl SimWorld {
         wanted.push(q_left);
         wanted.push(-q_left);
         let current: Vec<f64> = (0..wanted.len()).map(|j| self.joint_position(j)).collect();
-        let link_ids: Vec<usize> = (0..wanted.len()).map(|j| self.link_id(j)).collect();
+        let link_ids = &self.arm.link_ids;
         let physics = &mut self.physics;
         let (mb, _) = physics
             .multibody_joints
@@ -486,9 +484,7 @@ impl SimWorld {
             ServoMode::Reference => self.reference_gains,
         };
         let gripper = &self.gripper;
-        let link_ids: Vec<usize> = (0..self.model.joints.len())
-            .map(|j| self.link_id(j))
-            .collect();
+        let link_ids = &self.arm.link_ids;
         let (mb, _) = self
             .physics
             .multibody_joints
@@ -856,9 +852,14 @@ fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f
                 .collect()
         })
         .collect();
+    let link_ids = joints
+        .iter()
+        .map(|h| physics.multibody_joints.get(*h).expect("inserted joint").1)
+        .collect();
     ArmHandles {
         bodies,
         joints,
+        link_ids,
         finger_colliders,
         grip_site: model.links[GRIP_SITE_LINK],
         hand: model.links[HAND_LINK],
