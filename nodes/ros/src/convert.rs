@@ -353,3 +353,40 @@ pub fn arm_command(
     let finger = left.or(right.map(|r| -r));
     Ok((arm, finger.map(composuite_core::physics::pad_gap)))
 }
+
+/// What the reward and termination need, read back from a `world_state` message. Every number
+/// passes through the message unchanged, so the result equals the sim's own snapshot bit for bit.
+pub fn snapshot(w: &msg::WorldState) -> composuite_core::reward::WorldSnapshot {
+    let p = |p: &Point| nalgebra::Point3::new(p.x, p.y, p.z);
+    let q = &w.eef_pose.orientation;
+    let hand =
+        nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(q.w, q.x, q.y, q.z));
+    composuite_core::reward::WorldSnapshot {
+        object_position: p(&w.object_pose.position),
+        grip_site_position: p(&w.eef_pose.position),
+        hand_z_axis: hand * nalgebra::Vector3::z(),
+        grasping: w.grasping,
+        last_gripper_action: w.last_gripper_action,
+    }
+}
+
+/// A `tf` transform of `child` in the world frame.
+pub fn world_transform(
+    child: &str,
+    p: &Pose,
+    stamp: Time,
+) -> composuite_msgs::geometry_msgs::msg::TransformStamped {
+    use composuite_msgs::geometry_msgs::msg::{Transform, TransformStamped};
+    TransformStamped {
+        header: header(stamp),
+        child_frame_id: child.into(),
+        transform: Transform {
+            translation: Vector3 {
+                x: p.position.x,
+                y: p.position.y,
+                z: p.position.z,
+            },
+            rotation: p.orientation.clone(),
+        },
+    }
+}

@@ -5,11 +5,18 @@
 //! - [`names`]: the topic and service names, relative so a namespace can hold one environment;
 //! - [`ros_args`]: the `--ros-args` command line every ROS 2 node accepts;
 //! - [`qos`]: the QoS profile of each kind of topic;
-//! - [`environment`]: `ROS_DOMAIN_ID` and the discovery range, which ros2-client does not read.
+//! - [`environment`]: `ROS_DOMAIN_ID` and the discovery range, which ros2-client does not read;
+//! - [`node`] and [`params`]: what every node shares (start-up, parameters, logging, signals);
+//! - [`sim`], [`task_manager`], [`reward`]: the three nodes (the binaries are thin mains).
 #![warn(missing_docs)]
 
 pub mod convert;
 pub mod environment;
 pub mod names;
+pub mod node;
+pub mod params;
 pub mod qos;
+pub mod reward;
 pub mod ros_args;
+pub mod sim;
+pub mod task_manager;

@@ -29,3 +29,13 @@ pub const RESET: &str = "reset";
 pub const SAMPLE_TASKS: &str = "sample_tasks";
 /// The world frame every pose is expressed in.
 pub const WORLD_FRAME: &str = "world";
+/// The arm + gripper URDF (std_msgs/String), transient local, sim → RViz/Foxglove.
+pub const ROBOT_DESCRIPTION: &str = "robot_description";
+/// Transforms of the gripper, object and goal frames in the world (tf2_msgs/TFMessage).
+pub const TF: &str = "tf";
+/// `tf` frame of the grip site (position) with the hand's orientation: the reference's eef.
+pub const EEF_FRAME: &str = "eef";
+/// `tf` frame of the object's body origin.
+pub const OBJECT_FRAME: &str = "object";
+/// `tf` frame of the goal marker.
+pub const GOAL_FRAME: &str = "goal";

@@ -163,6 +163,28 @@ pub(crate) fn urdf_pose(pose: &urdf_rs::Pose) -> Isometry3<f64> {
     )
 }
 
+/// One URDF of the arm with its gripper mounted, as `robot_description` carries it for RViz
+/// and Foxglove: the arm's file with the gripper's links and joints appended and joined by the
+/// same fixed `gripper_mount` joint [`build_model`] adds.
+pub fn robot_description(robot: Robot) -> String {
+    let arm = urdf_text(robot);
+    let arm_body = &arm[..arm
+        .rfind("</robot>")
+        .expect("the arm URDF ends with </robot>")];
+    let open = GRIPPER_URDF
+        .find("<robot")
+        .expect("the gripper URDF has a <robot> element");
+    let body_start = open + GRIPPER_URDF[open..].find('>').expect("<robot ...>") + 1;
+    let body_end = GRIPPER_URDF
+        .rfind("</robot>")
+        .expect("the gripper URDF ends with </robot>");
+    format!(
+        "{arm_body}  <!-- the gripper (urdf/rethink_gripper.urdf) -->\n  <joint name=\"gripper_mount\" type=\"fixed\">\n    \
+         <parent link=\"{GRIPPER_MOUNT_LINK}\"/>\n    <child link=\"{GRIPPER_ROOT_LINK}\"/>\n  </joint>{}</robot>\n",
+        &GRIPPER_URDF[body_start..body_end]
+    )
+}
+
 /// Parse an arm URDF and the gripper URDF and merge them into a [`RobotModel`].
 pub fn build_model(
     robot: Robot,
@@ -420,5 +442,28 @@ impl MassAccumulator {
                 acc + inertia + (Matrix3::identity() * d.norm_squared() - d * d.transpose()) * *m
             });
         (mass, com, inertia)
+    }
+}
+
+#[cfg(test)]
+mod description_tests {
+    use super::*;
+
+    #[test]
+    fn robot_description_is_one_urdf_with_arm_and_gripper() {
+        for robot in Robot::all() {
+            let text = robot_description(robot);
+            let urdf = urdf_rs::read_from_string(&text).expect("robot_description parses");
+            let moving: Vec<&str> = urdf
+                .joints
+                .iter()
+                .filter(|j| !matches!(j.joint_type, urdf_rs::JointType::Fixed))
+                .map(|j| j.name.as_str())
+                .collect();
+            let model = robot_model(robot);
+            let expected: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+            assert_eq!(moving, expected, "{robot:?}");
+            assert!(urdf.links.iter().any(|l| l.name == GRIPPER_ROOT_LINK));
+        }
     }
 }

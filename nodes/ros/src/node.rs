@@ -1,0 +1,561 @@
+//! What every node of the suite shares: start-up from the command line the way rcl does it
+//! (`--ros-args`, `ROS_DOMAIN_ID`, discovery range, parameters), a ros2-client node with its
+//! spinner (graph, parameter services) on a thread of its own, topic/service creation that
+//! applies the remaps, a logger that writes to stderr and `/rosout`, and SIGINT/SIGTERM as an
+//! async event so the main loop can shut down cleanly.
+
+use std::fmt;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::thread::JoinHandle;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use composuite_msgs::{RosMessage, RosService};
+use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::dds::{
+    Context, Node, NodeLoggingHandle, Publisher, Server, ServiceMapping, Subscription,
+};
+use ros2_client::log::LogLevel;
+use ros2_client::rosout::RosoutRaw;
+use ros2_client::{
+    Message, MessageTypeName, Name, NodeName, NodeOptions, ParameterValue, QosProfile,
+    ServiceTypeName,
+};
+
+use crate::environment::{DiscoveryRange, RosEnvironment};
+use crate::params::{self, ParamSpec};
+use crate::ros_args::{self, RosArgs};
+
+/// Log severities, ordered (rcutils' levels).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Level {
+    /// Details for developers.
+    Debug = 10,
+    /// Normal progress.
+    Info = 20,
+    /// Something was wrong with the input and was refused or corrected.
+    Warn = 30,
+    /// Something failed.
+    Error = 40,
+    /// The node cannot go on.
+    Fatal = 50,
+}
+
+impl Level {
+    fn parse(text: &str) -> Option<Level> {
+        Some(match text.to_ascii_lowercase().as_str() {
+            "debug" => Level::Debug,
+            "info" => Level::Info,
+            "warn" | "warning" => Level::Warn,
+            "error" => Level::Error,
+            "fatal" => Level::Fatal,
+            _ => return None,
+        })
+    }
+
+    fn label(self) -> &'static str {
+        match self {
+            Level::Debug => "DEBUG",
+            Level::Info => "INFO",
+            Level::Warn => "WARN",
+            Level::Error => "ERROR",
+            Level::Fatal => "FATAL",
+        }
+    }
+
+    fn ros(self) -> LogLevel {
+        match self {
+            Level::Debug => LogLevel::Debug,
+            Level::Info => LogLevel::Info,
+            Level::Warn => LogLevel::Warn,
+            Level::Error => LogLevel::Error,
+            Level::Fatal => LogLevel::Fatal,
+        }
+    }
+}
+
+/// A node's logger: `[LEVEL] [wall time] [logger name]: message` on stderr (rcutils' default
+/// format) and the same record on `/rosout`. Records below the level are dropped.
+pub struct Logger {
+    name: String,
+    level: AtomicU8,
+    rosout: Option<NodeLoggingHandle>,
+}
+
+impl Logger {
+    /// A logger named like rcl names node loggers (`env_00.sim`), optionally without `/rosout`.
+    pub fn new(name: impl Into<String>, level: Level, rosout: Option<NodeLoggingHandle>) -> Self {
+        Logger {
+            name: name.into(),
+            level: AtomicU8::new(level as u8),
+            rosout,
+        }
+    }
+
+    /// Whether records of `level` are written.
+    pub fn enabled(&self, level: Level) -> bool {
+        level as u8 >= self.level.load(Ordering::Relaxed)
+    }
+
+    /// Write one record.
+    #[track_caller]
+    pub fn log(&self, level: Level, message: impl fmt::Display) {
+        if !self.enabled(level) {
+            return;
+        }
+        let now = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .unwrap_or_default();
+        let text = message.to_string();
+        eprintln!(
+            "[{}] [{}.{:09}] [{}]: {}",
+            level.label(),
+            now.as_secs(),
+            now.subsec_nanos(),
+            self.name,
+            text
+        );
+        if let Some(rosout) = &self.rosout {
+            let at = std::panic::Location::caller();
+            let stamp = ros2_client::builtin_interfaces::Time::from_nanos(now.as_nanos() as i64);
+            rosout.rosout_raw(
+                stamp,
+                level.ros(),
+                &self.name,
+                &text,
+                at.file(),
+                "",
+                at.line(),
+            );
+        }
+    }
+
+    /// [`Level::Debug`].
+    #[track_caller]
+    pub fn debug(&self, message: impl fmt::Display) {
+        self.log(Level::Debug, message)
+    }
+    /// [`Level::Info`].
+    #[track_caller]
+    pub fn info(&self, message: impl fmt::Display) {
+        self.log(Level::Info, message)
+    }
+    /// [`Level::Warn`].
+    #[track_caller]
+    pub fn warn(&self, message: impl fmt::Display) {
+        self.log(Level::Warn, message)
+    }
+    /// [`Level::Error`].
+    #[track_caller]
+    pub fn error(&self, message: impl fmt::Display) {
+        self.log(Level::Error, message)
+    }
+}
+
+/// What a node binary is: its default name, what it does, and its parameters.
+pub struct NodeSpec {
+    /// Default node name (`sim`, `task_manager`, `reward`).
+    pub name: &'static str,
+    /// The binary's name, for `--help`.
+    pub binary: &'static str,
+    /// One paragraph for `--help`.
+    pub about: &'static str,
+    /// Declared parameters.
+    pub params: &'static [ParamSpec],
+}
+
+impl NodeSpec {
+    /// The `--help` text: usage, the ROS arguments, every parameter with its default.
+    pub fn help(&self) -> String {
+        let mut out = format!(
+            "{about}\n\nUsage: {bin} [--ros-args [-r __ns:=/NS] [-r __node:=NAME] [-r FROM:=TO] \
+             [-p NAME:=VALUE] [--params-file FILE] [--log-level LEVEL]]\n\n\
+             Environment: ROS_DOMAIN_ID (0-232), ROS_AUTOMATIC_DISCOVERY_RANGE \
+             (OFF|LOCALHOST|SUBNET; ROS_LOCALHOST_ONLY=1 = LOCALHOST).\n\nParameters (default):\n",
+            about = self.about,
+            bin = self.binary
+        );
+        for p in self.params {
+            out.push_str(&format!(
+                "  {:<22} {} ({})\n",
+                p.name,
+                p.description,
+                show_value(&(p.default)())
+            ));
+        }
+        out.push_str(&format!(
+            "\nExample:\n  {} --ros-args -r __ns:=/env_00 -p {}:={}\n",
+            self.binary,
+            self.params.first().map_or("use_sim_time", |p| p.name),
+            self.params
+                .first()
+                .map_or("false".to_string(), |p| show_value(&(p.default)()))
+        ));
+        out
+    }
+}
+
+/// A parameter value the way `-p name:=value` writes it.
+pub fn show_value(v: &ParameterValue) -> String {
+    match v {
+        ParameterValue::String(s) => s.clone(),
+        ParameterValue::Boolean(b) => b.to_string(),
+        ParameterValue::Integer(i) => i.to_string(),
+        ParameterValue::Double(d) => format!("{d:?}"),
+        other => format!("{other:?}"),
+    }
+}
+
+/// A parameter changed through the parameter services.
+#[derive(Debug, Clone)]
+pub struct ParamChange {
+    /// Its name.
+    pub name: String,
+    /// The new value (already checked).
+    pub value: ParameterValue,
+}
+
+/// A running node: the ros2-client node, its logger, its parameters.
+pub struct RosNode {
+    /// The ros2-client node (create entities through [`RosNode`]'s methods, which remap).
+    pub node: Node,
+    /// Logger (stderr + `/rosout`).
+    pub log: Arc<Logger>,
+    /// The parsed `--ros-args`.
+    pub args: RosArgs,
+    /// Where the node talks.
+    pub environment: RosEnvironment,
+    /// Parameter changes made through the parameter services, as they are accepted.
+    pub param_changes: async_channel::Receiver<ParamChange>,
+    spinner: Option<JoinHandle<()>>,
+}
+
+/// Why a node could not start (bad arguments, bad environment, DDS failure).
+#[derive(Debug)]
+pub struct StartError(pub String);
+
+impl fmt::Display for StartError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for StartError {}
+
+/// What start-up gave: a running node, or the `--help` text.
+pub enum Startup {
+    /// The node runs.
+    Node(Box<RosNode>),
+    /// Print this and exit 0.
+    Help(String),
+}
+
+impl RosNode {
+    /// Start a node from the process's arguments (without the program name) and environment.
+    pub fn start(spec: &NodeSpec, argv: &[String]) -> Result<Startup, StartError> {
+        let args = ros_args::parse(argv).map_err(|e| StartError(e.to_string()))?;
+        if args.other.iter().any(|a| a == "-h" || a == "--help") {
+            return Ok(Startup::Help(spec.help()));
+        }
+        if let Some(extra) = args.other.first() {
+            return Err(StartError(format!(
+                "unexpected argument `{extra}`; {} takes only ROS arguments (see --help)",
+                spec.binary
+            )));
+        }
+        let environment = RosEnvironment::read(|k| std::env::var(k).ok())
+            .map_err(|e| StartError(e.to_string()))?;
+        let namespace = args.namespace.clone().unwrap_or_else(|| "/".into());
+        let base = args.node_name.clone().unwrap_or_else(|| spec.name.into());
+        let node_name = NodeName::new(&namespace, &base)
+            .map_err(|e| StartError(format!("node name {namespace}/{base}: {e:?}")))?;
+        let fully_qualified = node_name.fully_qualified_name();
+        let (values, unknown) =
+            params::resolve(spec.params, &args, &fully_qualified).map_err(StartError)?;
+        let level = match &args.log_level {
+            Some(l) => Level::parse(l.rsplit('=').next().unwrap_or(l)).ok_or_else(|| {
+                StartError(format!(
+                    "log level `{l}` is invalid; valid: debug, info, warn, error, fatal"
+                ))
+            })?,
+            None => Level::Info,
+        };
+
+        let mut builder = DomainParticipantBuilder::new(environment.domain_id);
+        if environment.discovery_range != DiscoveryRange::Subnet {
+            builder = builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
+        }
+        let participant = builder
+            .build()
+            .map_err(|e| StartError(format!("cannot create the DDS participant: {e:?}")))?;
+        let context = Context::from_domain_participant(participant)
+            .map_err(|e| StartError(format!("cannot create the ROS context: {e:?}")))?;
+
+        let (change_tx, param_changes) = async_channel::unbounded();
+        let specs: &'static [ParamSpec] = spec.params;
+        let mut options = NodeOptions::new()
+            .enable_rosout(true)
+            .start_parameter_services(true)
+            .parameter_validator(Box::new(move |name, value| {
+                match specs.iter().find(|s| s.name == name) {
+                    Some(s) => s.accept(value.clone()).map(|_| ()),
+                    None if name == "use_sim_time" => match value {
+                        ParameterValue::Boolean(false) => Ok(()),
+                        _ => Err("use_sim_time must stay false: this node is the clock".into()),
+                    },
+                    None => Err(format!("`{name}` is not a parameter of this node")),
+                }
+            }))
+            .parameter_set_action(Box::new(move |name, value| {
+                // The channel outlives the node's main loop; a closed one only means shutdown.
+                let _ = change_tx.try_send(ParamChange {
+                    name: name.to_string(),
+                    value: value.clone(),
+                });
+                Ok(())
+            }));
+        for (name, value) in &values {
+            options = options.declare_parameter(name, value.clone());
+        }
+        let mut node = context
+            .new_node(node_name, options)
+            .map_err(|e| StartError(format!("cannot create node {fully_qualified}: {e}")))?;
+        // The values declared above went through the set action once; drop those echoes.
+        while param_changes.try_recv().is_ok() {}
+        let logger_name = fully_qualified.trim_start_matches('/').replace('/', ".");
+        let log = Arc::new(Logger::new(logger_name, level, Some(node.logging_handle())));
+        for name in unknown {
+            log.warn(format!(
+                "ignoring parameter `{name}`: not a parameter of this node; its parameters are: {}",
+                spec.params
+                    .iter()
+                    .map(|p| p.name)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        let spinner = node
+            .spinner()
+            .map_err(|e| StartError(format!("cannot start the node's spinner: {e:?}")))?;
+        let spin_log = Arc::clone(&log);
+        let spinner = std::thread::Builder::new()
+            .name("ros-spinner".into())
+            .spawn(move || {
+                if let Err(e) = smol::block_on(spinner.spin()) {
+                    spin_log.error(format!("spinner stopped: {e:?}"));
+                }
+            })
+            .map_err(|e| StartError(format!("cannot start the spinner thread: {e}")))?;
+        Ok(Startup::Node(Box::new(RosNode {
+            node,
+            log,
+            args,
+            environment,
+            param_changes,
+            spinner: Some(spinner),
+        })))
+    }
+
+    /// The current value of a declared parameter.
+    pub fn param(&self, name: &str) -> ParameterValue {
+        self.node
+            .get_parameter(name)
+            .unwrap_or(ParameterValue::NotSet)
+    }
+
+    /// A string parameter.
+    pub fn param_string(&self, name: &str) -> String {
+        match self.param(name) {
+            ParameterValue::String(s) => s,
+            other => show_value(&other),
+        }
+    }
+
+    /// A double parameter.
+    pub fn param_f64(&self, name: &str) -> f64 {
+        match self.param(name) {
+            ParameterValue::Double(d) => d,
+            ParameterValue::Integer(i) => i as f64,
+            _ => f64::NAN,
+        }
+    }
+
+    /// An integer parameter.
+    pub fn param_i64(&self, name: &str) -> i64 {
+        match self.param(name) {
+            ParameterValue::Integer(i) => i,
+            _ => 0,
+        }
+    }
+
+    /// A boolean parameter.
+    pub fn param_bool(&self, name: &str) -> bool {
+        matches!(self.param(name), ParameterValue::Boolean(true))
+    }
+
+    /// The fully qualified node name (`/env_00/sim`).
+    pub fn fully_qualified_name(&self) -> String {
+        self.node.fully_qualified_name()
+    }
+
+    /// The absolute name of topic or service `name`: remapped, then put in the node's
+    /// namespace. (Given ros2-client a relative name in the root namespace `/`, it would write
+    /// `rt//name`, which no ROS 2 peer matches.)
+    fn resolve_name(&self, name: &str) -> Result<Name, StartError> {
+        let remapped = self.args.remapped(name);
+        let absolute = if remapped.starts_with('/') {
+            remapped.to_string()
+        } else {
+            match self.node.namespace().trim_end_matches('/') {
+                "" => format!("/{remapped}"),
+                ns => format!("{ns}/{remapped}"),
+            }
+        };
+        Name::parse(&absolute).map_err(|e| StartError(format!("topic name `{absolute}`: {e:?}")))
+    }
+
+    /// A publisher of `T` on topic `name` (remaps applied, relative to the namespace).
+    pub fn publisher<T: RosMessage + Message>(
+        &mut self,
+        name: &str,
+        qos: QosProfile,
+    ) -> Result<Publisher<T>, StartError> {
+        let topic_name = self.resolve_name(name)?;
+        let topic = self
+            .node
+            .create_topic(&topic_name, message_type_name::<T>(), &qos)
+            .map_err(|e| StartError(format!("topic {name}: {e:?}")))?;
+        self.node
+            .create_publisher(&topic, Some(qos))
+            .map_err(|e| StartError(format!("publisher {name}: {e:?}")))
+    }
+
+    /// A subscription to `T` on topic `name` (remaps applied, relative to the namespace).
+    pub fn subscription<T: RosMessage + Message>(
+        &mut self,
+        name: &str,
+        qos: QosProfile,
+    ) -> Result<Subscription<T>, StartError> {
+        let topic_name = self.resolve_name(name)?;
+        let topic = self
+            .node
+            .create_topic(&topic_name, message_type_name::<T>(), &qos)
+            .map_err(|e| StartError(format!("topic {name}: {e:?}")))?;
+        self.node
+            .create_subscription(&topic, Some(qos))
+            .map_err(|e| StartError(format!("subscription {name}: {e:?}")))
+    }
+
+    /// A server of service `S` named `name`, in the wire format of `mapping`.
+    pub fn server<S: RosService>(
+        &mut self,
+        name: &str,
+        mapping: ServiceMapping,
+    ) -> Result<Server<S::Request, S::Response>, StartError>
+    where
+        S::Request: Message,
+        S::Response: Message,
+    {
+        let service_name = self.resolve_name(name)?;
+        let (package, _, type_name) = split_ros_name(S::ROS_NAME);
+        let qos = crate::qos::services();
+        self.node
+            .create_server(
+                mapping,
+                &service_name,
+                &ServiceTypeName::new(package, type_name),
+                qos.clone(),
+                qos,
+            )
+            .map_err(|e| StartError(format!("service {name}: {e:?}")))
+    }
+
+    /// Stop the spinner and wait for its thread.
+    pub fn shutdown(mut self) {
+        self.node.stop_spinner();
+        if let Some(handle) = self.spinner.take() {
+            let _ = handle.join();
+        }
+    }
+}
+
+fn split_ros_name(ros_name: &'static str) -> (&'static str, &'static str, &'static str) {
+    let mut parts = ros_name.splitn(3, '/');
+    let package = parts.next().unwrap_or_default();
+    let kind = parts.next().unwrap_or_default();
+    let name = parts.next().unwrap_or_default();
+    (package, kind, name)
+}
+
+/// ros2-client's type name for a generated message (`pkg/msg/Name`).
+pub fn message_type_name<T: RosMessage>() -> MessageTypeName {
+    let (package, _, name) = split_ros_name(T::ROS_NAME);
+    MessageTypeName::new(package, name)
+}
+
+/// The service wire format named by the `service_mapping` parameter.
+pub fn service_mapping(name: &str) -> Result<ServiceMapping, String> {
+    match name.to_ascii_lowercase().as_str() {
+        "fastdds" | "fastrtps" | "enhanced" => Ok(ServiceMapping::Enhanced),
+        "cyclone" | "cyclonedds" => Ok(ServiceMapping::Cyclone),
+        other => Err(format!(
+            "service mapping `{other}` is unknown; valid: fastdds (rmw_fastrtps, Jazzy's default), cyclone (rmw_cyclonedds)"
+        )),
+    }
+}
+
+/// SIGINT and SIGTERM as a channel: one message when either arrives.
+pub fn shutdown_signal() -> std::io::Result<async_channel::Receiver<i32>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    let (tx, rx) = async_channel::bounded(4);
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            for signal in signals.forever() {
+                if tx.try_send(signal).is_err() {
+                    break;
+                }
+            }
+        })?;
+    Ok(rx)
+}
+
+/// The main of a node binary: start, run `body`, report errors, exit with a code.
+pub fn run_node(
+    spec: &NodeSpec,
+    body: impl FnOnce(&mut RosNode, async_channel::Receiver<i32>) -> Result<(), String>,
+) -> std::process::ExitCode {
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    let mut node = match RosNode::start(spec, &argv) {
+        Ok(Startup::Help(text)) => {
+            print!("{text}");
+            return std::process::ExitCode::SUCCESS;
+        }
+        Ok(Startup::Node(node)) => node,
+        Err(e) => {
+            eprintln!("{}: {e}", spec.binary);
+            return std::process::ExitCode::from(2);
+        }
+    };
+    let signals = match shutdown_signal() {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{}: cannot watch for signals: {e}", spec.binary);
+            return std::process::ExitCode::FAILURE;
+        }
+    };
+    let result = body(&mut node, signals);
+    let code = match &result {
+        Ok(()) => {
+            node.log.info("shut down cleanly");
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => {
+            node.log.log(Level::Fatal, e);
+            std::process::ExitCode::FAILURE
+        }
+    };
+    node.shutdown();
+    code
+}

@@ -1,0 +1,98 @@
+//! The `reward` node: for every `world_state` of a step, the objective's staged reward (the
+//! core library's functions) on `reward`, stamped like the world state it came from, and the
+//! success flag on `success`. The objective and object come from the latched `scene`.
+
+use composuite_core::TaskSpec;
+use composuite_core::reward::staged_reward;
+use composuite_msgs::msg;
+use composuite_msgs::std_msgs::msg::Bool;
+use futures::{FutureExt, StreamExt};
+
+use crate::convert;
+use crate::names;
+use crate::node::RosNode;
+use crate::params::ParamSpec;
+use crate::qos;
+
+/// World states kept while their episode's scene is on its way.
+const MAX_EARLY: usize = 64;
+
+/// The reward node has no parameters of its own.
+pub const PARAMS: &[ParamSpec] = &[];
+
+/// Run the reward node until SIGINT/SIGTERM.
+pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<(), String> {
+    let e = |e: crate::node::StartError| e.to_string();
+    let reward_pub = node
+        .publisher::<msg::StagedReward>(names::REWARD, qos::state())
+        .map_err(e)?;
+    let success_pub = node
+        .publisher::<Bool>(names::SUCCESS, qos::state())
+        .map_err(e)?;
+    let scene_sub = node
+        .subscription::<msg::Scene>(names::SCENE, qos::latched())
+        .map_err(e)?;
+    let world_sub = node
+        .subscription::<msg::WorldState>(names::WORLD_STATE, qos::state())
+        .map_err(e)?;
+    let log = node.log.clone();
+    log.info(format!("{} up", node.fully_qualified_name()));
+    // The task and episode the world states belong to.
+    let mut current: Option<(TaskSpec, u32)> = None;
+    // World states of an episode whose scene has not arrived yet (scene and world_state are
+    // separate topics, so their order is not guaranteed); scored when it does.
+    let mut early: Vec<msg::WorldState> = Vec::new();
+    let score = |task: TaskSpec, w: &msg::WorldState| {
+        let r = staged_reward(task.objective, task.object, &convert::snapshot(w));
+        let message = convert::staged_reward(&r, w.header.stamp.clone(), w.episode, w.step);
+        // Publishing only fails when DDS is shutting down.
+        let _ = reward_pub.publish(message);
+        let _ = success_pub.publish(Bool { data: r.success });
+    };
+    smol::block_on(async {
+        let mut scenes = std::pin::pin!(scene_sub.async_stream());
+        let mut worlds = std::pin::pin!(world_sub.async_stream());
+        loop {
+            futures::select_biased! {
+                signal = signals.recv().fuse() => {
+                    log.info(format!("signal {} received, shutting down", signal.unwrap_or(0)));
+                    return Ok(());
+                }
+                scene = scenes.select_next_some() => match scene {
+                    Ok((scene, _)) => {
+                        let t = &scene.task;
+                        let text = format!("{}/{}/{}/{}", t.robot, t.object, t.obstacle, t.objective);
+                        match text.parse::<TaskSpec>() {
+                            Ok(task) => {
+                                current = Some((task, scene.episode));
+                                for w in early.drain(..).filter(|w| w.episode == scene.episode) {
+                                    score(task, &w);
+                                }
+                            }
+                            Err(err) => log.error(format!("scene refused: {err}")),
+                        }
+                    }
+                    Err(err) => log.warn(format!("unreadable scene message dropped: {err:?}")),
+                },
+                world = worlds.select_next_some() => match world {
+                    Ok((w, _)) => {
+                        // Step 0 is the reset state: no action was taken, so no reward.
+                        if w.step == 0 {
+                            continue;
+                        }
+                        match current {
+                            Some((task, episode)) if w.episode == episode => score(task, &w),
+                            Some((_, episode)) if w.episode < episode => {}
+                            _ if early.len() < MAX_EARLY => early.push(w),
+                            _ => log.warn(format!(
+                                "world_state of episode {} dropped: its scene never arrived",
+                                w.episode
+                            )),
+                        }
+                    }
+                    Err(err) => log.warn(format!("unreadable world_state dropped: {err:?}")),
+                },
+            }
+        }
+    })
+}
