@@ -43,6 +43,13 @@ const PLATE_DISC_Z: f64 = 0.02;
 /// above bin 1's floor, 3.3 cm below the disc.
 const PLATE_OPEN: f64 = 0.044;
 
+/// Horizontal distance (m) from the hollow box's origin to the middle of a wall (facts §3:
+/// walls 1.6 cm thick centred at ±0.03).
+const HOLLOW_BOX_WALL_OFFSET: f64 = 0.03;
+/// Height (m) of the pads' centre above the hollow box's origin: the pads (3.3 cm long)
+/// cover the wall's upper part (walls reach z 0.06), the fingertips stay above the base.
+const HOLLOW_BOX_PAD_Z: f64 = 0.035;
+
 /// Where the pads go and how they get there.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Grasp {
@@ -173,14 +180,42 @@ fn top_grasp(input: &GraspInput) -> Grasp {
         top_orientation(model, q, &input.rotation, input.tilt, None)
     };
     let _ = input.obstacle;
+    let pad = if input.object == Object::HollowBox {
+        hollow_box_edge(o, &orientation)
+    } else {
+        o.coords
+    };
     Grasp {
         orientation,
-        pad: o.coords,
+        pad,
         approach: -Vector3::z(),
         backoff: 0.12,
         open: OPEN,
         top_down: true,
     }
+}
+
+/// The hollow box by one wall, from the top: the pads straddle the middle of the wall that
+/// crosses the closing axis (the inner finger in the cavity), on the robot's side.
+fn hollow_box_edge(o: Point3<f64>, orientation: &UnitQuaternion<f64>) -> Vector3<f64> {
+    // The grip site's y axis is the gripper frame's x; the fingers close along the gripper
+    // frame's y, which is the grip site's −x turned back: take the horizontal closing axis.
+    let closing = gripper_closing_axis(orientation);
+    let towards_robot = if closing.x > 1e-6 || (closing.x.abs() <= 1e-6 && closing.y > 0.0) {
+        -closing
+    } else {
+        closing
+    };
+    o.coords + towards_robot * HOLLOW_BOX_WALL_OFFSET + Vector3::z() * HOLLOW_BOX_PAD_Z
+}
+
+/// The horizontal axis the fingers close along for the grip-site `orientation` (unit, z 0).
+fn gripper_closing_axis(orientation: &UnitQuaternion<f64>) -> Vector3<f64> {
+    let gripper =
+        orientation * UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2);
+    let mut c = gripper * Vector3::y();
+    c.z = 0.0;
+    c.normalize()
 }
 
 /// The grip site's orientation for a gripper whose approach axis is `approach` and whose

@@ -20,6 +20,9 @@ use super::motion::{PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_solutions, smooth
 const OVER_OBJECT_WALL_Z: f64 = 1.17;
 /// Object-centre height (m) that clears the goal wall (top at z 1.10) with the box below it.
 const OVER_GOAL_WALL_Z: f64 = 1.19;
+/// The largest joint change (rad) planned per 50 ms control step: about 1 rad/s, what the
+/// arms' torque limits follow (the Jaco's elbow lags by up to 0.7 rad at 1.6 rad/s).
+const MAX_JOINT_STEP: f64 = 0.05;
 /// Object-centre height (m) for a plain lift and carry.
 const CARRY_Z: f64 = 1.05;
 /// How far above the object's resting height the object is carried while pushing (m).
@@ -467,6 +470,13 @@ impl Expert {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// The smallest clearance from the arena along `path`.
+    fn path_clearance(&self, model: &RobotModel, path: &[[f64; ARM_DOF]]) -> f64 {
+        path.iter()
+            .map(|q| self.clearance.at(model, q))
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Plans the approach to `grasp`'s pre-grasp (up to `clear_z`, over, down) and returns the
     /// smallest clearance from the arena along it and along the last stretch into the grasp
     /// (which is planned only later, from where the object is then).
@@ -523,10 +533,10 @@ impl Expert {
         seconds: f64,
     ) {
         let q0 = self.q.expect("planned from a known pose");
-        let n = steps(seconds);
-        for k in 1..=n {
-            let s = smoothstep(k as f64 / n as f64);
-            let joints = std::array::from_fn(|j| q0[j] + (goal[j] - q0[j]) * s);
+        // The smoothstep's peak speed is 1.5 times the mean.
+        let widest = distance_max(&q0, &goal);
+        let n = steps(seconds).max((1.5 * widest / MAX_JOINT_STEP).ceil() as usize);
+        for joints in joint_path(&q0, &goal, n) {
             self.plan.push_back(Action::Absolute {
                 joints,
                 gripper: Some((self.gripper, 0.0)),
@@ -547,21 +557,43 @@ impl Expert {
     ) {
         let (p0, r0) = (self.pad, self.orientation);
         let q0 = self.q.expect("planned from a known pose");
-        let n = steps(seconds);
-        let mut q = q0;
-        let mut line = Vec::with_capacity(n);
-        let mut all_met = true;
-        for k in 1..=n {
-            let s = smoothstep(k as f64 / n as f64);
-            let (next, met) = pad_ik(model, &q, p0 + (pad - p0) * s, r0.slerp(&orientation, s));
-            all_met &= met;
-            q = next;
-            line.push(q);
+        let mut n = steps(seconds);
+        let (mut line, mut all_met, mut end_met);
+        loop {
+            let mut q = q0;
+            line = Vec::with_capacity(n);
+            all_met = true;
+            end_met = false;
+            for k in 1..=n {
+                let s = smoothstep(k as f64 / n as f64);
+                let (next, met) = pad_ik(model, &q, p0 + (pad - p0) * s, r0.slerp(&orientation, s));
+                all_met &= met;
+                end_met = met;
+                q = next;
+                line.push(q);
+            }
+            // Too fast for the joints' torque limits: the lagging joints would bend the path
+            // (into a wall it was planned to pass over). Slow down, up to three times.
+            let fastest = max_joint_step(&q0, &line);
+            let limit = 3 * steps(seconds);
+            if fastest <= MAX_JOINT_STEP || n >= limit {
+                break;
+            }
+            n = ((n as f64 * fastest / MAX_JOINT_STEP).ceil() as usize).min(limit);
         }
+        let q = *line.last().expect("at least one step");
         if !all_met && let Some(goal) = self.best_solution(model, &q0, pad, orientation) {
-            // The straight line runs into a joint limit: move the joints straight instead.
-            self.joint_move(goal, pad, orientation, seconds);
-            return;
+            // The straight line runs into a joint limit: move the joints straight instead —
+            // unless the line still ends on its goal and the joint-space path comes closer to
+            // the arena than the line (it may swing the gripper into a wall the line passes
+            // over).
+            let line_gap = self.path_clearance(model, &line);
+            let joint_gap = self.path_clearance(model, &joint_path(&q0, &goal, n));
+            let seconds = n as f64 * 0.05;
+            if !end_met || joint_gap >= line_gap.min(MIN_CLEARANCE) {
+                self.joint_move(goal, pad, orientation, seconds);
+                return;
+            }
         }
         for joints in line {
             self.plan.push_back(Action::Absolute {
@@ -573,6 +605,35 @@ impl Expert {
         self.pad = pad;
         self.orientation = orientation;
     }
+}
+
+/// The largest joint change (rad) between consecutive targets of `path` (starting at `q0`).
+fn max_joint_step(q0: &[f64; ARM_DOF], path: &[[f64; ARM_DOF]]) -> f64 {
+    let mut prev = q0;
+    let mut most = 0.0_f64;
+    for q in path {
+        most = most.max(distance_max(prev, q));
+        prev = q;
+    }
+    most
+}
+
+/// The largest absolute joint difference (rad).
+fn distance_max(a: &[f64; ARM_DOF], b: &[f64; ARM_DOF]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// `n` joint targets from `q0` (excluded) to `goal` in a straight line with a smoothstep law.
+fn joint_path(q0: &[f64; ARM_DOF], goal: &[f64; ARM_DOF], n: usize) -> Vec<[f64; ARM_DOF]> {
+    (1..=n)
+        .map(|k| {
+            let s = smoothstep(k as f64 / n as f64);
+            std::array::from_fn(|j| q0[j] + (goal[j] - q0[j]) * s)
+        })
+        .collect()
 }
 
 /// Where the box waits in front of the shelf (y, m; the opening starts at y 0.14) and whether
