@@ -14,6 +14,7 @@ pub mod convert;
 pub mod environment;
 pub mod names;
 pub mod node;
+pub mod nodes;
 pub mod params;
 pub mod qos;
 pub mod reward;

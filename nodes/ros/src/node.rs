@@ -521,13 +521,14 @@ pub fn shutdown_signal() -> std::io::Result<async_channel::Receiver<i32>> {
     Ok(rx)
 }
 
-/// The main of a node binary: start, run `body`, report errors, exit with a code.
+/// The main of a node: start from `argv` (the arguments after the program name), run `body`
+/// until it returns (on SIGINT/SIGTERM), report errors, give the exit code.
 pub fn run_node(
     spec: &NodeSpec,
+    argv: &[String],
     body: impl FnOnce(&mut RosNode, async_channel::Receiver<i32>) -> Result<(), String>,
 ) -> std::process::ExitCode {
-    let argv: Vec<String> = std::env::args().skip(1).collect();
-    let mut node = match RosNode::start(spec, &argv) {
+    let mut node = match RosNode::start(spec, argv) {
         Ok(Startup::Help(text)) => {
             print!("{text}");
             return std::process::ExitCode::SUCCESS;
