@@ -21,7 +21,12 @@ use serde_json::{Value, json};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let result = match args.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+    let result = match args
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>()
+        .as_slice()
+    {
         ["run"] => run(),
         ["expert", task, seed] => expert(task, seed),
         _ => Err("usage: env_replay run < episode.json | env_replay expert TASK SEED".into()),
@@ -33,7 +38,8 @@ fn main() {
 }
 
 fn task_of(text: &str) -> Result<TaskSpec, String> {
-    text.parse().map_err(|e: composuite_core::TaskParseError| e.to_string())
+    text.parse()
+        .map_err(|e: composuite_core::TaskParseError| e.to_string())
 }
 
 fn run() -> Result<(), String> {
@@ -100,7 +106,9 @@ fn run() -> Result<(), String> {
 
 fn expert(task: &str, seed: &str) -> Result<(), String> {
     let task = task_of(task)?;
-    let seed: u64 = seed.parse().map_err(|_| format!("seed `{seed}` is not a number"))?;
+    let seed: u64 = seed
+        .parse()
+        .map_err(|_| format!("seed `{seed}` is not a number"))?;
     let mut env = Env::new(task, EnvConfig::default());
     env.reset(seed).map_err(|e| e.to_string())?;
     let mut expert = Expert::new(task);
