@@ -29,31 +29,35 @@ const GRACE: Duration = Duration::from_secs(5);
 /// --namespace /train
 #[derive(Args, Debug)]
 pub struct LaunchArgs {
-    /// Task of the first episode, robot/object/obstacle/objective (any spelling of each axis).
-    #[arg(long, default_value = composuite_ros::task_manager::DEFAULT_TASK)]
-    task: String,
-    /// lockstep (one control period per joint_command) or realtime (wall-clock pace).
-    #[arg(long, default_value = "lockstep")]
-    mode: String,
+    /// Task of the first episode, robot/object/obstacle/objective (any spelling of each axis)
+    /// [default: IIWA/box/no_obstacle/pick_place].
+    #[arg(long)]
+    task: Option<String>,
+    /// lockstep (one control period per joint_command) or realtime (wall-clock pace)
+    /// [default: lockstep].
+    #[arg(long)]
+    mode: Option<String>,
     /// Namespace of the environment(s), e.g. /train.
     #[arg(long, default_value = "/")]
     namespace: String,
     /// Number of environments.
     #[arg(long, default_value_t = 1)]
     envs: usize,
-    /// Seed of the first episode (environment i: seed + i).
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// Control steps per episode.
-    #[arg(long, default_value_t = 500)]
-    horizon: u32,
-    /// Service wire format: fastdds (rmw_fastrtps, Jazzy's default) or cyclone (rmw_cyclonedds).
-    #[arg(long, default_value = "fastdds")]
-    service_mapping: String,
+    /// Seed of the first episode (environment i: seed + i) [default: 0].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Control steps per episode [default: 500].
+    #[arg(long)]
+    horizon: Option<u32>,
+    /// Service wire format: fastdds (rmw_fastrtps, Jazzy's default) or cyclone (rmw_cyclonedds)
+    /// [default: fastdds].
+    #[arg(long)]
+    service_mapping: Option<String>,
     /// Start the next episode as soon as one ends.
     #[arg(long)]
     auto_reset: bool,
-    /// A parameters file (`/**: ros__parameters:` form) given to every node.
+    /// A parameters file (`/**: ros__parameters:` form) given to every node; the options above,
+    /// when given, win over it.
     #[arg(long)]
     params_file: Option<PathBuf>,
     /// Log level of the nodes: debug, info, warn, error, fatal.
@@ -85,17 +89,21 @@ fn env_namespace(base: &str, index: usize, count: usize) -> String {
 }
 
 fn validate(args: &LaunchArgs) -> Result<(), String> {
-    args.task
-        .parse::<TaskSpec>()
-        .map_err(|e| format!("--task: {e}"))?;
-    if composuite_ros::sim::Mode::parse(&args.mode).is_none() {
+    if let Some(task) = &args.task {
+        task.parse::<TaskSpec>()
+            .map_err(|e| format!("--task: {e}"))?;
+    }
+    if let Some(mode) = &args.mode
+        && composuite_ros::sim::Mode::parse(mode).is_none()
+    {
         return Err(format!(
-            "--mode {} is invalid; valid: lockstep, realtime",
-            args.mode
+            "--mode {mode} is invalid; valid: lockstep, realtime"
         ));
     }
-    composuite_ros::node::service_mapping(&args.service_mapping)
-        .map_err(|e| format!("--service-mapping: {e}"))?;
+    if let Some(mapping) = &args.service_mapping {
+        composuite_ros::node::service_mapping(mapping)
+            .map_err(|e| format!("--service-mapping: {e}"))?;
+    }
     let namespace_ok = args.namespace == "/"
         || (args.namespace.starts_with('/') && is_valid_name(&args.namespace, true));
     if !namespace_ok {
@@ -107,7 +115,7 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
     if !(1..=100).contains(&args.envs) {
         return Err(format!("--envs {} is invalid; valid: 1 to 100", args.envs));
     }
-    if args.horizon == 0 {
+    if args.horizon == Some(0) {
         return Err("--horizon must be at least 1".into());
     }
     if let Some(d) = args.duration
@@ -136,14 +144,29 @@ fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usi
     let mut param = |name: &str, value: String| {
         out.extend(["-p".into(), format!("{name}:={value}")]);
     };
+    // Only what was asked for: anything else comes from the params file or the defaults.
     match kind {
-        NodeKind::Sim => param("mode", args.mode.clone()),
+        NodeKind::Sim => {
+            if let Some(mode) = &args.mode {
+                param("mode", mode.clone());
+            }
+        }
         NodeKind::TaskManager => {
-            param("task", args.task.clone());
-            param("seed", (args.seed + index as u64).to_string());
-            param("horizon", args.horizon.to_string());
-            param("service_mapping", args.service_mapping.clone());
-            param("auto_reset", args.auto_reset.to_string());
+            if let Some(task) = &args.task {
+                param("task", task.clone());
+            }
+            if args.seed.is_some() || index > 0 {
+                param("seed", (args.seed.unwrap_or(0) + index as u64).to_string());
+            }
+            if let Some(horizon) = args.horizon {
+                param("horizon", horizon.to_string());
+            }
+            if let Some(mapping) = &args.service_mapping {
+                param("service_mapping", mapping.clone());
+            }
+            if args.auto_reset {
+                param("auto_reset", "true".into());
+            }
         }
         NodeKind::Reward => {}
     }
@@ -188,8 +211,8 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
         }
     }
     eprintln!(
-        "composuite launch: {} environment(s) × 3 nodes up ({} mode, task {}); Ctrl-C stops them",
-        args.envs, args.mode, args.task
+        "composuite launch: {} environment(s) × 3 nodes started; Ctrl-C stops them",
+        args.envs
     );
     let deadline = args
         .duration

@@ -1,0 +1,163 @@
+"""`composuite launch`, the params files and the `ros2 launch` file.
+
+The launcher is driven as a user would (a subprocess, signals), and watched with the cyclonedds
+agent over real DDS, inside the loopback-only namespace the test command provides."""
+
+from __future__ import annotations
+
+import ast
+import os
+import random
+import re
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+import ros_agent
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def bin_dir() -> Path:
+    path = os.environ.get("COMPOSUITE_NODE_DIR")
+    if not path:
+        target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
+        path = str(target / "debug")
+    return Path(path)
+
+
+def composuite() -> str:
+    exe = bin_dir() / "composuite"
+    if not exe.is_file():
+        raise FileNotFoundError(f"{exe} not found: build with `cargo build -p composuite`")
+    return str(exe)
+
+
+def node_processes(marker: str) -> list[int]:
+    """Pids of `composuite node` processes whose command line contains `marker`."""
+    pids = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            cmdline = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if " node " in cmdline and marker in cmdline:
+            pids.append(int(proc.name))
+    return pids
+
+
+def launch(*args: str, domain: int) -> subprocess.Popen:
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    return subprocess.Popen([composuite(), "launch", *args], env=env,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def test_two_realtime_environments_run_and_stop_cleanly_on_sigterm():
+    domain = random.randint(1, 200)
+    suite = launch("--envs", "2", "--namespace", "/lt", "--params-file",
+                   str(REPO / "params/realtime.yaml"), "--log-level", "warn", domain=domain)
+    try:
+        with ros_agent.Agent(namespace="/lt/env_01", domain_id=domain) as agent:
+            states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
+            clock = agent.subscribe("clock", "rosgraph_msgs/msg/Clock", qos="clock")
+            states.wait_for_publishers(timeout=20)
+            first = states.wait_for(None, timeout=20)
+            t0 = time.monotonic()
+            time.sleep(1.0)
+            later = [s for s in states.samples if s is not first]
+            rate = len(later) / (time.monotonic() - t0)
+            # Realtime mode: 20 Hz control steps on the wall clock, the last targets held.
+            assert 10 <= rate <= 30, f"joint_states at {rate:.1f} Hz"
+            stamps = [c.clock.sec + c.clock.nanosec * 1e-9 for c in clock.samples]
+            assert stamps == sorted(stamps) and stamps[-1] > stamps[0]
+            topics = {e.ros_name for e in agent.discovered_topics() if e.kind == "publication"}
+            for ns in ("/lt/env_00", "/lt/env_01"):
+                for topic in ("joint_states", "observation", "reward", "episode", "scene"):
+                    assert f"{ns}/{topic}" in topics, sorted(topics)
+        assert len(node_processes("__ns:=/lt/env_0")) == 6
+    finally:
+        suite.send_signal(signal.SIGTERM)
+        _, err = suite.communicate(timeout=15)
+    assert suite.returncode == 0, err
+    assert "signal 15" in err
+    assert node_processes("__ns:=/lt/env_0") == [], "nodes left running"
+
+
+def test_a_dying_node_stops_the_suite_with_an_error():
+    domain = random.randint(1, 200)
+    suite = launch("--namespace", "/die", "--log-level", "warn", domain=domain)
+    try:
+        deadline = time.monotonic() + 20
+        while len(node_processes("__ns:=/die")) < 3:
+            assert time.monotonic() < deadline, "the three nodes did not start"
+            time.sleep(0.1)
+        sim = [p for p in node_processes("__ns:=/die") if Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")[2] == b"sim"]
+        os.kill(sim[0], signal.SIGKILL)
+        _, err = suite.communicate(timeout=15)
+    finally:
+        if suite.poll() is None:
+            suite.kill()
+    assert suite.returncode != 0
+    assert "sim in /die exited on its own (killed by signal 9)" in err, err
+    assert node_processes("__ns:=/die") == []
+
+
+def test_bad_launch_options_are_refused_with_the_valid_choices():
+    for args, expected in [
+        (["--task", "IIWA/box/no_obstacle/fly"], "valid: pick_place, push, trash_can, shelf"),
+        (["--mode", "fast"], "valid: lockstep, realtime"),
+        (["--service-mapping", "zenoh"], "valid: fastdds"),
+        (["--namespace", "env"], "must be absolute"),
+        (["--envs", "0"], "valid: 1 to 100"),
+    ]:
+        result = subprocess.run([composuite(), "launch", *args], capture_output=True, text=True, timeout=20)
+        assert result.returncode == 2, (args, result.stderr)
+        assert expected in result.stderr, (args, result.stderr)
+
+
+def node_defaults(binary: str) -> dict[str, str]:
+    """Parameter defaults as the node's --help prints them: `  name  description (default)`."""
+    text = subprocess.run([str(bin_dir() / binary), "--help"], capture_output=True, text=True,
+                          check=True).stdout
+    section = text.split("Parameters (default):")[1].split("Example:")[0]
+    return {m.group(1): m.group(2) for m in re.finditer(r"^  (\w+) .*\((.*)\)$", section, re.M)}
+
+
+def test_params_file_holds_every_parameter_at_its_default():
+    params = yaml.safe_load((REPO / "params/composuite.yaml").read_text())
+    for node in ("sim", "task_manager"):
+        declared = node_defaults(f"{node}_node")
+        in_file = params[f"/**/{node}"]["ros__parameters"]
+        assert set(in_file) == set(declared), node
+        for name, value in in_file.items():
+            shown = str(value).lower() if isinstance(value, bool) else str(value)
+            assert shown == declared[name], (node, name, value, declared[name])
+
+
+def test_ros2_launch_file_names_real_parameters_with_the_same_defaults():
+    source = (REPO / "launch_scripts/composuite.launch.py").read_text()
+    tree = ast.parse(source)
+    constants = {t.id: ast.literal_eval(node.value) for node in tree.body
+                 if isinstance(node, ast.Assign) for t in node.targets
+                 if isinstance(t, ast.Name) and t.id in ("ARGUMENTS", "NODE_PARAMETERS")}
+    defaults = {name: default for name, default, _ in constants["ARGUMENTS"]}
+    for node, parameters in constants["NODE_PARAMETERS"].items():
+        declared = node_defaults(f"{node}_node") if node != "reward" else {}
+        for p in parameters:
+            assert p in declared, (node, p)
+            assert defaults[p] == declared[p], (node, p, defaults[p], declared[p])
+
+
+@pytest.mark.parametrize("binary", ["sim_node", "task_manager_node", "reward_node"])
+def test_node_help_and_bad_arguments(binary):
+    help_text = subprocess.run([str(bin_dir() / binary), "--help"], capture_output=True, text=True)
+    assert help_text.returncode == 0 and "--ros-args" in help_text.stdout
+    bad = subprocess.run([str(bin_dir() / binary), "--ros-args", "-r", "__ns:=relative"],
+                         capture_output=True, text=True, timeout=20)
+    assert bad.returncode == 2 and "must be absolute" in bad.stderr
