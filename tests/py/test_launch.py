@@ -161,3 +161,25 @@ def test_node_help_and_bad_arguments(binary):
     bad = subprocess.run([str(bin_dir() / binary), "--ros-args", "-r", "__ns:=relative"],
                          capture_output=True, text=True, timeout=20)
     assert bad.returncode == 2 and "must be absolute" in bad.stderr
+
+
+def test_ros_domain_id_is_honoured_and_checked():
+    domain = random.randint(1, 100)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    node = subprocess.Popen([str(bin_dir() / "reward_node"), "--ros-args", "-r", "__ns:=/dom"],
+                            env=env, stderr=subprocess.PIPE, text=True)
+    try:
+        def publishes_reward(e):
+            return e.kind == "publication" and e.ros_name == "/dom/reward"
+        with ros_agent.Agent(domain_id=domain) as same:
+            same.wait_for_endpoint(publishes_reward, timeout=10)
+        with ros_agent.Agent(domain_id=domain + 100) as other:
+            time.sleep(1.5)
+            assert not any(publishes_reward(e) for e in other.discovered_topics())
+    finally:
+        node.send_signal(signal.SIGINT)
+        _, err = node.communicate(timeout=10)
+    assert node.returncode == 0, err
+    bad = subprocess.run([str(bin_dir() / "sim_node")], env=dict(os.environ, ROS_DOMAIN_ID="300"),
+                         capture_output=True, text=True, timeout=20)
+    assert bad.returncode == 2 and "ROS_DOMAIN_ID=300 is invalid; valid: 0..=232" in bad.stderr
