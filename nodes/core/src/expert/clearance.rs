@@ -1,0 +1,175 @@
+//! How far the arm is from the arena for given joint angles, from the arm's kinematic model
+//! (its collision primitives) and the arena tables — no physics involved.
+//!
+//! Each arm primitive is covered by spheres (along a capsule's or cylinder's axis, over a
+//! box's faces); each arena solid is a box (a cylinder by its bounding box). The clearance is
+//! the smallest gap between any sphere and any solid, negative when they overlap.
+
+use nalgebra::{Isometry3, Point3, Vector3};
+
+use crate::arena::{Placed, Primitive, arena_parts};
+use crate::axes::{Objective, Obstacle};
+use crate::kinematics::body_poses;
+use crate::physics::{ARM_DOF, RobotModel, Shape};
+
+/// Sphere spacing along a primitive, as a fraction of the sphere radius.
+const SPACING: f64 = 0.5;
+
+/// A sphere fixed to one body of the arm.
+#[derive(Debug, Clone, Copy)]
+struct Sphere {
+    body: usize,
+    centre: Point3<f64>,
+    radius: f64,
+}
+
+/// An arena solid as an oriented box.
+#[derive(Debug, Clone, Copy)]
+struct Solid {
+    inverse_pose: Isometry3<f64>,
+    half: Vector3<f64>,
+}
+
+/// The spheres of one arm and the solids of one arena.
+pub(super) struct Clearance {
+    spheres: Vec<Sphere>,
+    solids: Vec<Solid>,
+}
+
+impl Clearance {
+    /// The arm `model` in the arena of `objective` and `obstacle`.
+    pub fn new(model: &RobotModel, objective: Objective, obstacle: Obstacle) -> Clearance {
+        let mut spheres = Vec::new();
+        // Body 0 is the fixed base on its pedestal, far from everything.
+        for (body, b) in model.bodies.iter().enumerate().skip(1) {
+            for c in &b.collisions {
+                for (centre, radius) in cover(&c.shape) {
+                    spheres.push(Sphere {
+                        body,
+                        centre: c.pose * centre,
+                        radius,
+                    });
+                }
+            }
+        }
+        let solids = arena_parts(objective, obstacle)
+            .iter()
+            .filter(|p| p.collides)
+            .map(solid)
+            .collect();
+        Clearance { spheres, solids }
+    }
+
+    /// The smallest gap (m) between the arm at `q` (fingers open) and the arena.
+    pub fn at(&self, model: &RobotModel, q: &[f64; ARM_DOF]) -> f64 {
+        let poses = body_poses(model, q, [0.0, 0.0]);
+        let mut gap = f64::INFINITY;
+        for s in &self.spheres {
+            let c = poses[s.body] * s.centre;
+            for solid in &self.solids {
+                gap = gap.min(box_distance(solid, &c) - s.radius);
+            }
+        }
+        gap
+    }
+}
+
+/// Spheres (centre in the shape's frame, radius) covering a primitive.
+fn cover(shape: &Shape) -> Vec<(Point3<f64>, f64)> {
+    let along_z = |radius: f64, half: f64| -> Vec<(Point3<f64>, f64)> {
+        let n = ((2.0 * half) / (SPACING * radius)).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|k| {
+                let z = -half + 2.0 * half * k as f64 / n as f64;
+                (Point3::new(0.0, 0.0, z), radius)
+            })
+            .collect()
+    };
+    match *shape {
+        Shape::Sphere(r) => vec![(Point3::origin(), r)],
+        Shape::Capsule {
+            radius,
+            half_length,
+        } => along_z(radius, half_length),
+        // Spheres inside the flat ends; the rims are covered within a few mm.
+        Shape::Cylinder {
+            radius,
+            half_length,
+        } => along_z(radius, (half_length - 0.5 * radius).max(0.0)),
+        Shape::Box(h) => {
+            // Spheres of the smallest half-extent on a grid over the other two.
+            let (axis, r) = (0..3)
+                .map(|i| (i, h[i]))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .expect("three axes");
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let steps = |half: f64| ((2.0 * (half - r).max(0.0)) / (SPACING * r)).ceil() as usize;
+            let (nu, nv) = (steps(h[u]), steps(h[v]));
+            let mut out = Vec::new();
+            for i in 0..=nu {
+                for j in 0..=nv {
+                    let mut p = Vector3::zeros();
+                    let span = |half: f64, k: usize, n: usize| {
+                        let half = (half - r).max(0.0);
+                        if n == 0 {
+                            0.0
+                        } else {
+                            -half + 2.0 * half * k as f64 / n as f64
+                        }
+                    };
+                    p[u] = span(h[u], i, nu);
+                    p[v] = span(h[v], j, nv);
+                    out.push((Point3::from(p), r));
+                }
+            }
+            out
+        }
+    }
+}
+
+/// An arena part as an oriented box (a cylinder by its bounding box).
+fn solid(part: &Placed) -> Solid {
+    let half = match part.shape {
+        Primitive::Box { half_extents } => half_extents,
+        Primitive::Cylinder {
+            radius,
+            half_length,
+        } => Vector3::new(radius, radius, half_length),
+    };
+    Solid {
+        inverse_pose: part.pose.inverse(),
+        half,
+    }
+}
+
+/// Signed distance from `p` to the box (negative inside).
+fn box_distance(solid: &Solid, p: &Point3<f64>) -> f64 {
+    let local = solid.inverse_pose * p;
+    let d = local.coords.abs() - solid.half;
+    let outside = d.map(|x| x.max(0.0)).norm();
+    let inside = d.max().min(0.0);
+    outside + inside
+}
+
+/// The gap (m) the expert keeps between the arm and the arena where it has a choice.
+pub(super) const MIN_CLEARANCE: f64 = 0.01;
+
+/// Of `solutions` (best first), the first whose clearance is at least [`MIN_CLEARANCE`], else
+/// the one with the most; with its clearance.
+pub(super) fn best_clear(
+    clearance: &Clearance,
+    model: &RobotModel,
+    solutions: Vec<[f64; ARM_DOF]>,
+) -> Option<([f64; ARM_DOF], f64)> {
+    let mut best: Option<([f64; ARM_DOF], f64)> = None;
+    for q in solutions {
+        let gap = clearance.at(model, &q);
+        if gap >= MIN_CLEARANCE {
+            return Some((q, gap));
+        }
+        if best.is_none_or(|(_, g)| gap > g) {
+            best = Some((q, gap));
+        }
+    }
+    best
+}

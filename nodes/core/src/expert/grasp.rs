@@ -1,0 +1,247 @@
+//! Object-specific grasps: where the pads go, how the gripper is turned, and from which side
+//! the pads come in.
+//!
+//! The gripper frame (`gripper_base`): +z is the approach axis (from the wrist towards the
+//! fingertips), the fingers slide along ±y. [`gripper_orientation`] turns an approach and a
+//! closing axis into the grip site's orientation, which the IK tracks.
+
+use nalgebra::{Point3, Unit, UnitQuaternion, Vector3};
+
+use crate::arena::object_geometry;
+use crate::axes::{Object, Objective, Obstacle};
+use crate::kinematics::{frame_from_axes, link_pose};
+use crate::physics::{ARM_DOF, RobotModel};
+
+use super::motion::reach_cost;
+
+/// Gripper opening (m) while approaching and releasing: fully open (the pads reach 0.0788).
+pub(super) const OPEN: f64 = 0.08;
+/// Gripper opening (m) commanded to grasp (the 20 N finger servos then hold the object).
+pub(super) const CLOSED: f64 = 0.0;
+
+/// The dumbbell's side grasp: the approach axis leans this far below horizontal (rad), so the
+/// wrist behind the gripper stays above bin 1's floor and rims while the gripper base still
+/// fits between the discs (gap 8.3 cm, base Ø 5.8 cm).
+const DUMBBELL_PITCH: f64 = 0.5;
+/// Pads' centre below the dumbbell's origin (m): the middle of the bar between the discs is
+/// the origin; a little lower keeps the pitched gripper base clear of the upper disc.
+const DUMBBELL_PAD_BELOW_ORIGIN: f64 = 0.02;
+
+/// The plate's rim grasp: the approach axis leans this far below horizontal (rad) so the
+/// gripper base (a Ø 5.8 cm × 10 cm cylinder along the closing axis, 6 cm behind the pads)
+/// clears bin 1's floor while the pads sit at the disc's height.
+const PLATE_PITCH: f64 = 0.38;
+/// The plate's rim grasp: roll about the approach axis (rad). The disc is 1.40 cm thick and
+/// the pads close to 1.41 cm at most, so square-on pads never squeeze it; rolled, the pads'
+/// edges bite the disc's faces across a wider span ((t + w·sin β)/cos β ≈ 1.5 cm).
+const PLATE_ROLL: f64 = 0.14;
+/// How far inside the plate's rim the pads' centre goes (m); the pads are 3.3 cm long.
+const PLATE_PAD_INSIDE_RIM: f64 = 0.012;
+/// Height of the plate's disc centre above the plate's origin (m, facts §3).
+const PLATE_DISC_Z: f64 = 0.02;
+/// Opening (m) while the pads slide over and under the plate's rim: the lower finger must stay
+/// above bin 1's floor, 3.3 cm below the disc.
+const PLATE_OPEN: f64 = 0.044;
+
+/// Where the pads go and how they get there.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Grasp {
+    /// Grip-site orientation at the grasp.
+    pub orientation: UnitQuaternion<f64>,
+    /// Pads' centre at the grasp (world, m).
+    pub pad: Vector3<f64>,
+    /// Unit direction the pads move along over the last stretch into the grasp.
+    pub approach: Vector3<f64>,
+    /// Length of that last stretch (m): the pre-grasp is this far back along `approach`.
+    pub backoff: f64,
+    /// Gripper opening (m) during the approach.
+    pub open: f64,
+    /// Whether the gripper points down (top grasp) rather than sideways.
+    pub top_down: bool,
+}
+
+impl Grasp {
+    /// The pre-grasp pads' centre.
+    pub fn pre(&self) -> Vector3<f64> {
+        self.pad - self.approach * self.backoff
+    }
+}
+
+/// What the grasp planner may look at.
+pub(super) struct GraspInput<'a> {
+    pub model: &'a RobotModel,
+    pub q: [f64; ARM_DOF],
+    pub object: Object,
+    pub objective: Objective,
+    pub obstacle: Obstacle,
+    pub position: Point3<f64>,
+    pub rotation: UnitQuaternion<f64>,
+    /// Lean of a top-down approach towards the robot (rad; 0 = vertical).
+    pub tilt: f64,
+}
+
+/// The grasps of the object in `input`, the planner's preferred one first.
+pub(super) fn grasp_candidates(input: &GraspInput) -> Vec<Grasp> {
+    match input.object {
+        Object::Box | Object::HollowBox => vec![top_grasp(input)],
+        Object::Dumbbell => side_grasps(|h| dumbbell_grasps_towards(input.position, h)),
+        Object::Plate => side_grasps(|h| plate_grasps_towards(input.position, h)),
+    }
+}
+
+/// The horizontal directions a side grasp may point in, best first: +y (towards bin 2, so
+/// the object goes into the shelf without turning), then turning towards +x (away from the
+/// robot), which arms with a shorter reach need for objects on bin 1's far side.
+fn side_headings() -> [Vector3<f64>; 4] {
+    let d = std::f64::consts::FRAC_1_SQRT_2;
+    [
+        Vector3::y(),
+        Vector3::new(d, d, 0.0),
+        Vector3::x(),
+        Vector3::new(d, -d, 0.0),
+    ]
+}
+
+/// The grasps each heading allows, best heading first.
+fn side_grasps(grasps_at: impl Fn(Vector3<f64>) -> Vec<Grasp>) -> Vec<Grasp> {
+    side_headings().into_iter().flat_map(grasps_at).collect()
+}
+
+/// The dumbbell by its bar, from the side: the approach axis leaning down, the fingers
+/// closing horizontally across the bar between the discs; pointing along `h`, both ways round.
+fn dumbbell_grasps_towards(position: Point3<f64>, h: Vector3<f64>) -> Vec<Grasp> {
+    let pitch = DUMBBELL_PITCH;
+    let approach = (h * pitch.cos() - Vector3::z() * pitch.sin()).normalize();
+    let across = h.cross(&Vector3::z()).normalize();
+    let pad = position.coords - Vector3::z() * DUMBBELL_PAD_BELOW_ORIGIN;
+    [across, -across]
+        .map(|closing| Grasp {
+            orientation: gripper_orientation(approach, closing),
+            pad,
+            // Slide in level, between the discs.
+            approach: h,
+            backoff: 0.08,
+            open: OPEN,
+            top_down: false,
+        })
+        .to_vec()
+}
+
+/// The plate by its rim, from the side: the fingers close (nearly) vertically on the disc;
+/// pointing along `h`, both ways round, rolled either way.
+fn plate_grasps_towards(position: Point3<f64>, h: Vector3<f64>) -> Vec<Grasp> {
+    let (pitch, roll) = (PLATE_PITCH, PLATE_ROLL);
+    let approach = (h * pitch.cos() - Vector3::z() * pitch.sin()).normalize();
+    let up = (h * pitch.sin() + Vector3::z() * pitch.cos()).normalize();
+    let axis = Unit::new_normalize(approach);
+    let radius = object_geometry(Object::Plate).horizontal_radius;
+    let pad = position.coords - h * (radius - PLATE_PAD_INSIDE_RIM) + Vector3::z() * PLATE_DISC_Z;
+    [roll, -roll]
+        .into_iter()
+        .flat_map(|roll| {
+            let c = UnitQuaternion::from_axis_angle(&axis, roll) * up;
+            [c, -c]
+        })
+        .map(|closing| Grasp {
+            orientation: gripper_orientation(approach, closing),
+            pad,
+            // Slide in level: the lower finger stays between the floor and the disc.
+            approach: h,
+            backoff: 0.07,
+            open: PLATE_OPEN,
+            top_down: false,
+        })
+        .collect()
+}
+
+/// The box (and, for now, the hollow box) from the top, centred on the object.
+fn top_grasp(input: &GraspInput) -> Grasp {
+    let GraspInput { model, q, .. } = input;
+    let o = input.position;
+    let orientation = if input.objective == Objective::Shelf {
+        // Close along x (the box later turns about it); of the two signs take the one the IK
+        // reaches over the object, moving the joints least.
+        let over = Vector3::new(o.x, o.y, o.z + 0.12);
+        [Vector3::x(), -Vector3::x()]
+            .map(|axis| top_orientation(model, q, &input.rotation, input.tilt, Some(axis)))
+            .into_iter()
+            .map(|r| (r, reach_cost(model, q, over, r)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(r, _)| r)
+            .expect("two candidates")
+    } else {
+        top_orientation(model, q, &input.rotation, input.tilt, None)
+    };
+    let _ = input.obstacle;
+    Grasp {
+        orientation,
+        pad: o.coords,
+        approach: -Vector3::z(),
+        backoff: 0.12,
+        open: OPEN,
+        top_down: true,
+    }
+}
+
+/// The grip site's orientation for a gripper whose approach axis is `approach` and whose
+/// fingers close along `closing` (the grip site is the gripper frame turned −90° about z).
+pub(super) fn gripper_orientation(
+    approach: Vector3<f64>,
+    closing: Vector3<f64>,
+) -> UnitQuaternion<f64> {
+    frame_from_axes(approach, closing)
+        * UnitQuaternion::from_euler_angles(0.0, 0.0, -std::f64::consts::FRAC_PI_2)
+}
+
+/// The grip-site orientation that points the gripper straight down with the fingers closing
+/// along whichever horizontal axis of the object is nearest their current closing direction.
+///
+/// With `tilt` ≠ 0 (rad) the fingers close along the object axis nearest world y and the
+/// approach axis leans towards the robot (−x) by `tilt`, so the wrist and forearm stay high
+/// and far from walls standing between the robot and the grasp.
+fn top_orientation(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+    object_rotation: &UnitQuaternion<f64>,
+    tilt: f64,
+    close_along: Option<Vector3<f64>>,
+) -> UnitQuaternion<f64> {
+    let gripper = link_pose(model, q, "gripper_base").expect("gripper base link");
+    let mut heading = gripper.rotation * Vector3::y();
+    heading.z = 0.0;
+    if let Some(axis) = close_along {
+        heading = axis;
+    } else if tilt != 0.0 {
+        heading = Vector3::y() * heading.y.signum();
+    }
+    let candidates = [
+        object_rotation * Vector3::x(),
+        object_rotation * Vector3::y(),
+    ];
+    let mut best = heading;
+    let mut best_dot = -1.0;
+    for c in candidates {
+        let mut c = c;
+        c.z = 0.0;
+        if c.norm() < 1e-6 {
+            continue;
+        }
+        let c = c.normalize();
+        for c in [c, -c] {
+            let d = c.dot(&heading);
+            if d > best_dot {
+                best_dot = d;
+                best = c;
+            }
+        }
+    }
+    let approach = if tilt != 0.0 {
+        // Perpendicular to the closing axis, leaning towards −x.
+        let along = best.cross(&Vector3::z()).normalize();
+        let along = if along.x > 0.0 { -along } else { along };
+        (along * tilt.sin() - Vector3::z() * tilt.cos()).normalize()
+    } else {
+        -Vector3::z()
+    };
+    gripper_orientation(approach, best)
+}

@@ -1,0 +1,142 @@
+//! Motion primitives: straight lines of the pads' centre turned into joint targets with the
+//! crate's IK, one per control step.
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use std::f64::consts::PI;
+
+use crate::kinematics::{IkResult, IkTarget, solve_ik};
+use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel};
+
+/// The pads' centre is this far above the grip site along the gripper's approach axis (m):
+/// the pads span 0.0859…0.1189 from the gripper mount, the grip site is at 0.109.
+pub(super) const PAD_CENTRE_ABOVE_GRIP_SITE: f64 = 0.109 - (0.0859 + 0.1189) / 2.0;
+/// Iterations per IK solve (seeded from the previous step's solution, so few are needed).
+const IK_ITERATIONS: usize = 80;
+/// Position error (m) above which an IK solve is retried with more iterations.
+const IK_RETRY_ERROR: f64 = 2e-3;
+/// Iterations of the retry.
+const IK_RETRY_ITERATIONS: usize = 600;
+/// Position error (m) up to which a solve counts as reaching its target.
+const IK_MET_POSITION: f64 = 0.005;
+/// Orientation error (rad) up to which a solve counts as reaching its target.
+const IK_MET_ORIENTATION: f64 = 0.05;
+/// Spread-out seeds tried by [`pad_ik_global`].
+const GLOBAL_SEEDS: usize = 24;
+/// Orientation error weight in the IK.
+const IK_ORIENTATION_WEIGHT: f64 = 0.5;
+
+/// Control steps (50 ms) in `seconds`.
+pub(super) fn steps(seconds: f64) -> usize {
+    ((seconds / 0.05).round() as usize).max(1)
+}
+
+/// The smoothstep time law: 0 → 1 with zero speed at both ends.
+pub(super) fn smoothstep(s: f64) -> f64 {
+    s * s * (3.0 - 2.0 * s)
+}
+
+/// The IK target that puts the pads' centre at `pad` with the grip site turned to `orientation`.
+fn pad_target(pad: Vector3<f64>, orientation: UnitQuaternion<f64>) -> IkTarget {
+    IkTarget {
+        position: pad - orientation * Vector3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE),
+        orientation: Some(orientation),
+        orientation_weight: IK_ORIENTATION_WEIGHT,
+    }
+}
+
+/// Joints that put the pads at `pad` with `orientation`, seeded from `q` (and `q` itself when
+/// the solver fails outright), and whether the solve met the pose.
+pub(super) fn pad_ik(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+    pad: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> ([f64; ARM_DOF], bool) {
+    let target = pad_target(pad, orientation);
+    let mut result = solve_ik(model, GRIP_SITE_LINK, &target, q, IK_ITERATIONS);
+    if result.is_none_or(|r| r.position_error > IK_RETRY_ERROR) {
+        // A large step (a wrist turn): give the solver more room before accepting.
+        result = solve_ik(model, GRIP_SITE_LINK, &target, q, IK_RETRY_ITERATIONS);
+    }
+    match result {
+        Some(r) => (r.q, met(&r)),
+        None => (*q, false),
+    }
+}
+
+/// Whether an IK result is close enough to its target to be tracked.
+fn met(r: &IkResult) -> bool {
+    r.position_error < IK_MET_POSITION && r.orientation_error < IK_MET_ORIENTATION
+}
+
+/// Every distinct way of meeting the pose found from several seeds (`q`, then `q` with one
+/// joint moved far, then spread-out poses), the ones moving the joints least first.
+/// Used where following a straight line from `q` runs into a joint limit, and to pick a
+/// grasp the arm reaches without touching the arena.
+pub(super) fn pad_ik_solutions(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+    pad: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> Vec<[f64; ARM_DOF]> {
+    let target = pad_target(pad, orientation);
+    let limits: Vec<(f64, f64)> = model.joints[..ARM_DOF]
+        .iter()
+        .map(|j| j.limits.unwrap_or((-PI, PI)))
+        .collect();
+    let mut seeds = vec![*q];
+    for j in 0..ARM_DOF {
+        for delta in [-1.2, 1.2] {
+            let mut s = *q;
+            s[j] = (s[j] + delta).clamp(limits[j].0, limits[j].1);
+            seeds.push(s);
+        }
+    }
+    // A fixed quasi-random spread (golden-ratio sequence) over the joint ranges.
+    let mut u = 0.5_f64;
+    for _ in 0..GLOBAL_SEEDS {
+        let mut s = *q;
+        for (j, (lo, hi)) in limits.iter().enumerate() {
+            u = (u + 0.618_033_988_75).fract();
+            let (lo, hi) = (lo.max(-PI), hi.min(PI));
+            s[j] = lo + (hi - lo) * u;
+        }
+        seeds.push(s);
+    }
+    let mut found: Vec<([f64; ARM_DOF], f64)> = Vec::new();
+    for s in &seeds {
+        let Some(r) = solve_ik(model, GRIP_SITE_LINK, &target, s, IK_RETRY_ITERATIONS) else {
+            continue;
+        };
+        if !met(&r) || found.iter().any(|(f, _)| distance(f, &r.q) < 0.05) {
+            continue;
+        }
+        found.push((r.q, distance(&r.q, q)));
+    }
+    found.sort_by(|a, b| a.1.total_cmp(&b.1));
+    found.into_iter().map(|(q, _)| q).collect()
+}
+
+/// Summed absolute joint differences (rad).
+pub(super) fn distance(a: &[f64; ARM_DOF], b: &[f64; ARM_DOF]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum()
+}
+
+/// How hard it is to put the pads at `pad` with `orientation` from `q`: the IK's remaining
+/// error (heavily weighted) plus the joint motion.
+pub(super) fn reach_cost(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+    pad: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> f64 {
+    let target = pad_target(pad, orientation);
+    match solve_ik(model, GRIP_SITE_LINK, &target, q, IK_RETRY_ITERATIONS) {
+        Some(r) => {
+            let motion: f64 = r.q.iter().zip(q).map(|(a, b)| (a - b).abs()).sum();
+            100.0 * (r.position_error + r.orientation_error) + motion
+        }
+        None => f64::INFINITY,
+    }
+}

@@ -1,0 +1,594 @@
+//! The phase machine.
+
+use std::collections::VecDeque;
+use std::f64::consts::FRAC_PI_2;
+
+use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
+
+use crate::TaskSpec;
+use crate::arena::{SHELF, TRASH_CAN, object_geometry, objective_arena};
+use crate::axes::{Objective, Obstacle, Robot};
+use crate::env::{Action, Env};
+use crate::kinematics::link_pose;
+use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel, robot_model};
+
+use super::clearance::{Clearance, MIN_CLEARANCE, best_clear};
+use super::grasp::{CLOSED, Grasp, GraspInput, OPEN, grasp_candidates};
+use super::motion::{PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_solutions, smoothstep, steps};
+
+/// Pad-centre height (m) that clears the object wall and door (tops at z 1.07).
+const OVER_OBJECT_WALL_Z: f64 = 1.17;
+/// Object-centre height (m) that clears the goal wall (top at z 1.10) with the box below it.
+const OVER_GOAL_WALL_Z: f64 = 1.19;
+/// Object-centre height (m) for a plain lift and carry.
+const CARRY_Z: f64 = 1.05;
+/// How far above the object's resting height the object is carried while pushing (m).
+const PUSH_LIFT: f64 = 0.012;
+/// Object-centre height (m) a side-grasped object is carried at while pushing: just under
+/// the 0.9 m line whose crossing ends a Push episode.
+const PUSH_SIDE_CARRY_Z: f64 = 0.885;
+/// Inner face of bin 2's far wall (x, m; facts §2.1).
+const BIN2_FAR_WALL_X: f64 = 0.29;
+/// x (m) of a lane further out than [`AROUND_GOAL_WALL_X`], for arms whose wrist swings wide.
+const PUSH_WIDE_LANE_X: f64 = 0.26;
+/// x (m) of the lane that goes around the goal wall's free end (the wall ends at x 0.11).
+const AROUND_GOAL_WALL_X: f64 = 0.22;
+/// How far (rad) the approach axis leans towards the robot when walls are near the arm.
+const GRASP_TILT: f64 = 0.45;
+/// Height (m) of the carried box's centre above the shelf board while inserting: midway in
+/// the 15.5 cm opening, so the gripper's housing around the box clears the board and the top
+/// block (the box, lying on its side, then drops about 5 cm onto the board).
+const SHELF_INSERT_HEIGHT: f64 = 0.075;
+/// How far past the shelf's front the box's centre goes (m): to y 0.28, inside the
+/// 0.18…0.33 success band, with its far end 1 cm short of the back panel.
+const SHELF_INSERT_DEPTH: f64 = 0.05;
+/// Where a side-grasped object's origin ends in the shelf (y, m): inside the 0.18…0.33 band
+/// with the plate's far rim short of the back panel (y 0.32).
+const SHELF_SIDE_TARGET_Y: f64 = 0.25;
+/// x (m) of the lane into the shelf when the goal wall stands at x −0.10…0.11: past the
+/// wall's free end, so the forearm crosses the wall's line beyond it.
+const SHELF_LANE_PAST_GOAL_WALL_X: f64 = 0.17;
+/// Gap (m) between a side-grasped object's bottom and the surface it is put down on before
+/// the fingers open.
+const DROP_GAP: f64 = 0.015;
+/// Where a side-grasped object may be put into bin 2 (x, y; m), best first: past the bin's
+/// centre (0.1, 0.18) so the wrist behind the gripper is inside the bin rather than over its
+/// near walls (top z 0.90).
+const BIN2_SIDE_SPOTS: [[f64; 2]; 5] = [
+    [0.1, 0.26],
+    [0.17, 0.24],
+    [0.2, 0.18],
+    [0.1, 0.18],
+    [0.2, 0.28],
+];
+/// Top of bin 2's floor (m, facts §2.1).
+const PICK_PLACE_FLOOR: f64 = 0.82;
+/// Highest the origin of a side-grasped object is lowered to in bin 2 (m): under the bin's
+/// 0.9 m success line, so the wrist stays as high as it can above the bin's walls.
+const SIDE_RELEASE_Z: f64 = 0.885;
+/// Height (m) of the trash can's wall tops (0.825 + 0.005 + 2 · 0.08 ≈ 0.9855) plus a margin:
+/// the object's bottom is released here.
+const OVER_TRASH_CAN_Z: f64 = 1.01;
+
+/// The phases of the script, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Phase {
+    /// Not started.
+    Start,
+    /// To the pre-grasp, gripper open and turned to the grasp.
+    Approach,
+    /// The last stretch into the grasp pose.
+    Descend,
+    /// Closing the fingers.
+    Close,
+    /// Lifting the object.
+    Lift,
+    /// Carrying it towards the objective's target.
+    Transport,
+    /// The objective's placing motion (lower into the bin; slide to the goal; over the can).
+    Place,
+    /// Opening the fingers.
+    Release,
+    /// Moving the gripper away.
+    Retreat,
+    /// Holding still until the episode ends.
+    Done,
+}
+
+/// The scripted expert of one task.
+pub struct Expert {
+    task: TaskSpec,
+    phase: Phase,
+    /// Planned actions not yet sent.
+    plan: VecDeque<Action>,
+    /// The joints of the last planned target (the next segment's IK seed).
+    q: Option<[f64; ARM_DOF]>,
+    /// The pads' centre at the end of the last planned segment.
+    pad: Vector3<f64>,
+    /// The grip site orientation at the end of the last planned segment.
+    orientation: UnitQuaternion<f64>,
+    /// The gripper opening last commanded.
+    gripper: f64,
+    /// The grasp being executed.
+    grasp: Option<Grasp>,
+    /// Where the object was when the grasp was planned (m).
+    grasp_object: Point3<f64>,
+    /// The arm's distance to the arena, for choosing among IK solutions.
+    clearance: Clearance,
+}
+
+impl Expert {
+    /// The expert of `task`; call [`Expert::act`] once per control step.
+    pub fn new(task: TaskSpec) -> Expert {
+        Expert {
+            task,
+            phase: Phase::Start,
+            plan: VecDeque::new(),
+            q: None,
+            pad: Vector3::zeros(),
+            orientation: UnitQuaternion::identity(),
+            gripper: OPEN,
+            grasp: None,
+            grasp_object: Point3::origin(),
+            clearance: Clearance::new(robot_model(task.robot), task.objective, task.obstacle),
+        }
+    }
+
+    /// The phase the expert is in.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The next action for the environment's current state.
+    pub fn act(&mut self, env: &Env) -> Action {
+        while self.plan.is_empty() && self.phase != Phase::Done {
+            self.next_phase(env);
+        }
+        match self.plan.pop_front() {
+            Some(action) => action,
+            None => Action::Absolute {
+                joints: self.q.unwrap_or_else(|| env.world().arm_positions()),
+                gripper: Some((self.gripper, 0.0)),
+            },
+        }
+    }
+
+    /// Whether the grasp is a top-down one.
+    fn top_down(&self) -> bool {
+        self.grasp.is_none_or(|g| g.top_down)
+    }
+
+    /// Plans the segments of the phase after the current one.
+    fn next_phase(&mut self, env: &Env) {
+        let model = env.world().model;
+        let obs = env.observation();
+        let object = Point3::from(obs.object.position);
+        let [x, y, z, w] = obs.object.orientation;
+        let object_rotation = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+        let task = self.task;
+        let walled = matches!(task.obstacle, Obstacle::ObjectWall | Obstacle::ObjectDoor);
+        let goal_wall = task.obstacle == Obstacle::GoalWall;
+        let bottom = object_geometry(task.object).bottom_offset;
+        match self.phase {
+            Phase::Start => {
+                let q = env.world().arm_positions();
+                self.q = Some(q);
+                let grip = link_pose(model, &q, GRIP_SITE_LINK).expect("grip site link");
+                self.orientation = grip.rotation;
+                self.pad = (grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE)).coords;
+                self.phase = Phase::Approach;
+                // The Panda's forearm hangs low over walls near the robot unless the gripper
+                // leans; the other arms clear them with a vertical gripper.
+                let near_wall = walled || (goal_wall && task.objective == Objective::Push);
+                let tilt = if task.robot == Robot::Panda && near_wall {
+                    GRASP_TILT
+                } else {
+                    0.0
+                };
+                let candidates = grasp_candidates(&GraspInput {
+                    model,
+                    q,
+                    object: task.object,
+                    objective: task.objective,
+                    obstacle: task.obstacle,
+                    position: object,
+                    rotation: object_rotation,
+                    tilt,
+                });
+                self.grasp_object = object;
+                let clear_z = if walled {
+                    OVER_OBJECT_WALL_Z
+                } else {
+                    object.z + 0.12
+                };
+                // The first grasp (in the planner's order of preference) whose whole approach
+                // keeps clear of the arena, else the one coming closest to that.
+                let start = (self.pad, self.orientation);
+                let mut best: Option<(Grasp, f64)> = None;
+                for grasp in candidates {
+                    let gap = self.plan_approach(model, &grasp, clear_z);
+                    if gap >= MIN_CLEARANCE {
+                        best = None;
+                        break;
+                    }
+                    if best.is_none_or(|(_, b)| gap > b) {
+                        best = Some((grasp, gap));
+                    }
+                    self.plan.clear();
+                    self.q = Some(q);
+                    (self.pad, self.orientation) = start;
+                }
+                if let Some((grasp, _)) = best {
+                    self.plan_approach(model, &grasp, clear_z);
+                }
+            }
+            Phase::Approach => {
+                self.phase = Phase::Descend;
+                let grasp = self.grasp.expect("planned");
+                // The object may have been nudged since the plan: keep the grasp's offset.
+                let pad = grasp.pad + (object - self.grasp_object);
+                self.grasp_object = object;
+                self.segment(model, pad, self.orientation, 1.5);
+            }
+            Phase::Descend => {
+                self.phase = Phase::Close;
+                self.gripper = CLOSED;
+                self.hold(0.6);
+            }
+            Phase::Close => {
+                self.phase = Phase::Lift;
+                let rest = self.grasp_object.z;
+                let lift_to = match task.objective {
+                    Objective::Push if self.top_down() => rest + PUSH_LIFT,
+                    // Side grasps hold the wrist low: carry as high as Push allows.
+                    Objective::Push => PUSH_SIDE_CARRY_Z.max(rest + PUSH_LIFT),
+                    _ if goal_wall => OVER_GOAL_WALL_Z,
+                    _ if walled => OVER_OBJECT_WALL_Z,
+                    _ => CARRY_Z,
+                };
+                let offset = self.pad - self.grasp_object.coords;
+                let target = Vector3::new(self.pad.x, self.pad.y, lift_to + offset.z);
+                self.segment(model, target, self.orientation, 1.5);
+            }
+            Phase::Lift => {
+                self.phase = Phase::Transport;
+                let h = self.pad.z;
+                let o = self.orientation;
+                // The pads relative to the object, so targets can name where the object goes.
+                let held = self.pad - object.coords;
+                match task.objective {
+                    Objective::Push => {
+                        // Straight to the goal, or round a lane at x (the goal wall's free
+                        // end; bin 2's near wall for a low wrist): the first that keeps clear.
+                        let goal = env.goal();
+                        let t = Vector3::new(goal.x + held.x, goal.y + held.y, h);
+                        let lanes: &[Option<f64>] = if self.top_down() {
+                            // The box's fingertips pass just over the floor: no clearance
+                            // check, the lanes measured for it.
+                            if goal_wall {
+                                &[Some(AROUND_GOAL_WALL_X)]
+                            } else {
+                                &[None]
+                            }
+                        } else if goal_wall {
+                            &[Some(AROUND_GOAL_WALL_X), Some(PUSH_WIDE_LANE_X)]
+                        } else {
+                            &[None, Some(AROUND_GOAL_WALL_X), Some(PUSH_WIDE_LANE_X)]
+                        };
+                        self.first_clear(model, lanes, |e, lane| {
+                            if let Some(lane) = lane {
+                                // The object itself must pass inside bin 2's far wall.
+                                let radius = object_geometry(task.object).horizontal_radius;
+                                let lane = lane.min(BIN2_FAR_WALL_X - radius - 0.01) + held.x;
+                                let y = e.pad.y;
+                                e.segment(model, Vector3::new(lane, y, h), o, 1.0);
+                                e.segment(model, Vector3::new(lane, t.y - 0.03, h), o, 2.0);
+                            }
+                            e.segment(model, t, o, 2.0);
+                        });
+                    }
+                    Objective::PickPlace if !self.top_down() => {
+                        // Carry and lower in one go, to the first spot in bin 2 the arm
+                        // reaches without touching the bin's walls (the wrist is behind and
+                        // below the gripper); success comes as soon as the object's origin is
+                        // under the bin's 0.9 m line with the gripper on it.
+                        let z = (PICK_PLACE_FLOOR - bottom + DROP_GAP).min(SIDE_RELEASE_Z);
+                        let spots = BIN2_SIDE_SPOTS.map(|[x, y]| Vector3::new(x, y, z) + held);
+                        self.first_clear(model, &spots, |e, t| {
+                            e.segment(model, Vector3::new(t.x, t.y, h), o, 2.0);
+                            e.segment(model, t, o, 1.5);
+                        });
+                    }
+                    Objective::PickPlace => {
+                        let bin = objective_arena(Objective::PickPlace).bin2_position;
+                        let t = Vector3::new(bin[0] + held.x, bin[1] + held.y, h);
+                        self.segment(model, t, o, 2.0);
+                    }
+                    Objective::Shelf if !self.top_down() => {
+                        // In front of the shelf with the object clear of its front (y 0.14),
+                        // then down to the opening's height.
+                        let x = if goal_wall {
+                            SHELF_LANE_PAST_GOAL_WALL_X
+                        } else {
+                            SHELF.position[0]
+                        };
+                        let radius = object_geometry(task.object).horizontal_radius;
+                        let front = SHELF.position[1] - 2.0 * SHELF.y_size - radius - 0.03;
+                        let board = SHELF.position[2] + SHELF.z_offset;
+                        let z = board - bottom + DROP_GAP + 0.01;
+                        let level = Vector3::new(held.x, held.y, 0.0);
+                        self.segment(model, Vector3::new(x, front, h) + level, o, 2.0);
+                        self.segment(model, Vector3::new(x, front, z) + held, o, 1.5);
+                    }
+                    Objective::Shelf => {
+                        // In front of the shelf, then down to the opening's height.
+                        let x = if goal_wall {
+                            SHELF_LANE_PAST_GOAL_WALL_X
+                        } else {
+                            SHELF.position[0]
+                        };
+                        let z = SHELF.position[2] + SHELF.z_offset + SHELF_INSERT_HEIGHT;
+                        let (front_y, turn_high) = shelf_approach(task.robot);
+                        self.segment(model, Vector3::new(x, front_y, h), o, 2.0);
+                        let o = if turn_high {
+                            let sideways = turned_to_shelf(&o);
+                            self.segment(model, Vector3::new(x, front_y, h), sideways, 2.0);
+                            sideways
+                        } else {
+                            o
+                        };
+                        self.segment(model, Vector3::new(x, front_y, z), o, 1.5);
+                    }
+                    Objective::TrashCan => {
+                        let [cx, cy, _] = TRASH_CAN.position;
+                        let t = Vector3::new(cx + held.x, cy + held.y, h);
+                        self.segment(model, t, o, 2.0);
+                    }
+                }
+            }
+            Phase::Transport => {
+                self.phase = Phase::Place;
+                let held = self.pad - object.coords;
+                match task.objective {
+                    Objective::Shelf if !self.top_down() => {
+                        let t = Vector3::new(self.pad.x, SHELF_SIDE_TARGET_Y + held.y, self.pad.z);
+                        self.segment(model, t, self.orientation, 2.0);
+                    }
+                    Objective::Shelf => {
+                        // Turn the gripper (and the box with it) about the closing axis until
+                        // the approach axis points at the shelf (unless it already turned), then go
+                        // straight in along +y.
+                        let sideways = if shelf_approach(task.robot).1 {
+                            self.orientation
+                        } else {
+                            let sideways = turned_to_shelf(&self.orientation);
+                            self.segment(model, self.pad, sideways, 2.0);
+                            sideways
+                        };
+                        let inside = SHELF.position[1] - SHELF.y_size + SHELF_INSERT_DEPTH;
+                        let t = Vector3::new(self.pad.x, inside, self.pad.z);
+                        self.segment(model, t, sideways, 2.0);
+                    }
+                    Objective::PickPlace if !self.top_down() => self.hold(0.2),
+                    Objective::PickPlace => {
+                        // Bring the object's bottom 1.5 cm above bin 2's floor.
+                        let target_z = PICK_PLACE_FLOOR - bottom + DROP_GAP;
+                        let t = Vector3::new(self.pad.x, self.pad.y, target_z + held.z);
+                        self.segment(model, t, self.orientation, 1.5);
+                    }
+                    Objective::Push => self.hold(0.3),
+                    Objective::TrashCan => {
+                        // Just above the can's walls before letting go.
+                        let t = Vector3::new(
+                            self.pad.x,
+                            self.pad.y,
+                            OVER_TRASH_CAN_Z - bottom + held.z,
+                        );
+                        let t = if goal_wall { self.pad } else { t };
+                        self.segment(model, t, self.orientation, 1.0);
+                    }
+                }
+            }
+            Phase::Place => {
+                self.phase = Phase::Release;
+                self.gripper = OPEN;
+                self.hold(0.8);
+            }
+            Phase::Release => {
+                self.phase = Phase::Retreat;
+                let back = self.grasp.map_or(Vector3::zeros(), |g| -g.approach);
+                match task.objective {
+                    Objective::TrashCan => {
+                        let t = Vector3::new(self.pad.x, self.pad.y - 0.05, self.pad.z + 0.12);
+                        self.segment(model, t, self.orientation, 1.5);
+                    }
+                    Objective::Shelf if self.top_down() => {
+                        let t = Vector3::new(self.pad.x, shelf_approach(task.robot).0, self.pad.z);
+                        self.segment(model, t, self.orientation, 1.5);
+                    }
+                    Objective::Shelf => {
+                        let t = self.pad + back * 0.12;
+                        self.segment(model, t, self.orientation, 1.5);
+                    }
+                    _ => self.hold(0.2),
+                }
+            }
+            Phase::Retreat | Phase::Done => self.phase = Phase::Done,
+        }
+    }
+
+    /// Keeps the last target for `seconds`, with the current gripper command.
+    fn hold(&mut self, seconds: f64) {
+        let q = self.q.expect("planned from a known pose");
+        for _ in 0..steps(seconds) {
+            self.plan.push_back(Action::Absolute {
+                joints: q,
+                gripper: Some((self.gripper, 0.0)),
+            });
+        }
+    }
+
+    /// Plans `plan(self, option)` for the first of `options` whose motion keeps
+    /// [`MIN_CLEARANCE`] from the arena, else for the one coming closest.
+    fn first_clear<T: Copy>(
+        &mut self,
+        model: &RobotModel,
+        options: &[T],
+        plan: impl Fn(&mut Self, T),
+    ) {
+        let start = (self.q, self.pad, self.orientation, self.plan.len());
+        let mut best: Option<(T, f64)> = None;
+        for &option in options {
+            plan(self, option);
+            let gap = self.plan_clearance(model, start.3);
+            if gap >= MIN_CLEARANCE {
+                return;
+            }
+            if best.is_none_or(|(_, b)| gap > b) {
+                best = Some((option, gap));
+            }
+            (self.q, self.pad, self.orientation) = (start.0, start.1, start.2);
+            self.plan.truncate(start.3);
+        }
+        if let Some((option, _)) = best {
+            plan(self, option);
+        }
+    }
+
+    /// The smallest clearance from the arena of the planned actions from `from` on.
+    fn plan_clearance(&self, model: &RobotModel, from: usize) -> f64 {
+        self.plan
+            .iter()
+            .skip(from)
+            .map(|a| match a {
+                Action::Absolute { joints, .. } => self.clearance.at(model, joints),
+                Action::Reference(_) => f64::INFINITY,
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Plans the approach to `grasp`'s pre-grasp (up to `clear_z`, over, down) and returns the
+    /// smallest clearance from the arena along it and along the last stretch into the grasp
+    /// (which is planned only later, from where the object is then).
+    fn plan_approach(&mut self, model: &RobotModel, grasp: &Grasp, clear_z: f64) -> f64 {
+        self.grasp = Some(*grasp);
+        self.gripper = grasp.open;
+        let pre = grasp.pre();
+        let clear = clear_z.max(pre.z);
+        let mut rise = self.pad;
+        rise.z = rise.z.max(clear);
+        self.segment(model, rise, grasp.orientation, 1.0);
+        self.segment(
+            model,
+            Vector3::new(pre.x, pre.y, clear),
+            grasp.orientation,
+            1.5,
+        );
+        if pre.z < clear - 1e-6 {
+            self.segment(model, pre, grasp.orientation, 1.0);
+        }
+        let planned = self.plan.len();
+        let at_pre = (self.q, self.pad, self.orientation);
+        self.segment(model, grasp.pad, grasp.orientation, 1.5);
+        let gap = self.plan_clearance(model, 0);
+        self.plan.truncate(planned);
+        (self.q, self.pad, self.orientation) = at_pre;
+        gap
+    }
+
+    /// Of the IK solutions for the pose, the first (least motion from `q`) that keeps
+    /// [`MIN_CLEARANCE`] from the arena, else the one with the most clearance.
+    fn best_solution(
+        &self,
+        model: &RobotModel,
+        q: &[f64; ARM_DOF],
+        pad: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+    ) -> Option<[f64; ARM_DOF]> {
+        best_clear(
+            &self.clearance,
+            model,
+            pad_ik_solutions(model, q, pad, orientation),
+        )
+        .map(|(q, _)| q)
+    }
+
+    /// Joints moved in a straight line (smoothstep) to `goal`, which puts the pads at `pad`
+    /// with `orientation`.
+    fn joint_move(
+        &mut self,
+        goal: [f64; ARM_DOF],
+        pad: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+        seconds: f64,
+    ) {
+        let q0 = self.q.expect("planned from a known pose");
+        let n = steps(seconds);
+        for k in 1..=n {
+            let s = smoothstep(k as f64 / n as f64);
+            let joints = std::array::from_fn(|j| q0[j] + (goal[j] - q0[j]) * s);
+            self.plan.push_back(Action::Absolute {
+                joints,
+                gripper: Some((self.gripper, 0.0)),
+            });
+        }
+        self.q = Some(goal);
+        self.pad = pad;
+        self.orientation = orientation;
+    }
+
+    /// A straight line of the pads' centre to `pad` while turning to `orientation`.
+    fn segment(
+        &mut self,
+        model: &RobotModel,
+        pad: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+        seconds: f64,
+    ) {
+        let (p0, r0) = (self.pad, self.orientation);
+        let q0 = self.q.expect("planned from a known pose");
+        let n = steps(seconds);
+        let mut q = q0;
+        let mut line = Vec::with_capacity(n);
+        let mut all_met = true;
+        for k in 1..=n {
+            let s = smoothstep(k as f64 / n as f64);
+            let (next, met) = pad_ik(model, &q, p0 + (pad - p0) * s, r0.slerp(&orientation, s));
+            all_met &= met;
+            q = next;
+            line.push(q);
+        }
+        if !all_met && let Some(goal) = self.best_solution(model, &q0, pad, orientation) {
+            // The straight line runs into a joint limit: move the joints straight instead.
+            self.joint_move(goal, pad, orientation, seconds);
+            return;
+        }
+        for joints in line {
+            self.plan.push_back(Action::Absolute {
+                joints,
+                gripper: Some((self.gripper, 0.0)),
+            });
+        }
+        self.q = Some(q);
+        self.pad = pad;
+        self.orientation = orientation;
+    }
+}
+
+/// Where the box waits in front of the shelf (y, m; the opening starts at y 0.14) and whether
+/// the gripper turns to the shelf there at the carry height (`true`) or only after lowering
+/// to the opening's height. Measured per arm: turning high at y 0.08 would sweep the fingers
+/// into the shelf's top block; turning low at y 0.08 keeps the IIWA's, Jaco's and Panda's
+/// forearms clear of the door's near post, while the Gen3 does best turning high at y 0.
+fn shelf_approach(robot: Robot) -> (f64, bool) {
+    match robot {
+        Robot::Gen3 => (0.0, true),
+        _ => (0.08, false),
+    }
+}
+
+/// `orientation` (gripper pointing down, closing along x) turned about the world x axis until
+/// the approach axis points along +y, into the shelf.
+fn turned_to_shelf(orientation: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2) * orientation
+}
