@@ -28,9 +28,9 @@ ARGUMENTS = [
     ("auto_reset", "false", "start the next episode as soon as one ends"),
 ]
 NODE_PARAMETERS = {
-    "task_manager": ["task", "seed", "horizon", "service_mapping", "auto_reset"],
-    "sim": ["mode", "realtime_factor"],
-    "reward": [],
+    "task_manager": ["task", "seed", "horizon", "auto_reset", "service_mapping"],
+    "sim": ["mode", "realtime_factor", "service_mapping"],
+    "reward": ["service_mapping"],
 }
 
 

@@ -131,9 +131,10 @@ def node_defaults(binary: str) -> dict[str, str]:
 
 def test_params_file_holds_every_parameter_at_its_default():
     params = yaml.safe_load((REPO / "params/composuite.yaml").read_text())
-    for node in ("sim", "task_manager"):
+    for node in ("sim", "task_manager", "reward"):
         declared = node_defaults(f"{node}_node")
-        in_file = params[f"/**/{node}"]["ros__parameters"]
+        in_file = dict(params["/**"]["ros__parameters"])
+        in_file.update(params.get(f"/**/{node}", {}).get("ros__parameters", {}))
         assert set(in_file) == set(declared), node
         for name, value in in_file.items():
             shown = str(value).lower() if isinstance(value, bool) else str(value)
@@ -148,7 +149,7 @@ def test_ros2_launch_file_names_real_parameters_with_the_same_defaults():
                  if isinstance(t, ast.Name) and t.id in ("ARGUMENTS", "NODE_PARAMETERS")}
     defaults = {name: default for name, default, _ in constants["ARGUMENTS"]}
     for node, parameters in constants["NODE_PARAMETERS"].items():
-        declared = node_defaults(f"{node}_node") if node != "reward" else {}
+        declared = node_defaults(f"{node}_node")
         for p in parameters:
             assert p in declared, (node, p)
             assert defaults[p] == declared[p], (node, p, defaults[p], declared[p])

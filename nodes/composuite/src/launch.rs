@@ -145,6 +145,9 @@ fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usi
         out.extend(["-p".into(), format!("{name}:={value}")]);
     };
     // Only what was asked for: anything else comes from the params file or the defaults.
+    if let Some(mapping) = &args.service_mapping {
+        param("service_mapping", mapping.clone());
+    }
     match kind {
         NodeKind::Sim => {
             if let Some(mode) = &args.mode {
@@ -160,9 +163,6 @@ fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usi
             }
             if let Some(horizon) = args.horizon {
                 param("horizon", horizon.to_string());
-            }
-            if let Some(mapping) = &args.service_mapping {
-                param("service_mapping", mapping.clone());
             }
             if args.auto_reset {
                 param("auto_reset", "true".into());
