@@ -1,9 +1,8 @@
 """`composuite launch`, the params files and the `ros2 launch` file.
 
 The launcher is driven as a user would (a subprocess, signals), and watched with the cyclonedds
-agent over real DDS, inside the loopback-only namespace the test command provides."""
-
-from __future__ import annotations
+agent over real DDS, inside the loopback-only namespace the test command provides. (No
+`from __future__ import annotations` here: cyclonedds IDL classes need real annotation objects.)"""
 
 import ast
 import os
@@ -184,3 +183,70 @@ def test_ros_domain_id_is_honoured_and_checked():
     bad = subprocess.run([str(bin_dir() / "sim_node")], env=dict(os.environ, ROS_DOMAIN_ID="300"),
                          capture_output=True, text=True, timeout=20)
     assert bad.returncode == 2 and "ROS_DOMAIN_ID=300 is invalid; valid: 0..=232" in bad.stderr
+
+
+def test_remaps_and_node_name_apply_to_a_running_node():
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    node = subprocess.Popen([str(bin_dir() / "sim_node"), "--ros-args", "-r", "__ns:=/rm",
+                             "-r", "__node:=arm_sim", "-r", "joint_states:=arm_states",
+                             "-r", "joint_command:=/global_command"],
+                            env=env, stderr=subprocess.PIPE, text=True)
+    try:
+        with ros_agent.Agent(domain_id=domain) as agent:
+            agent.wait_for_endpoint(lambda e: e.kind == "publication" and e.ros_name == "/rm/arm_states",
+                                    timeout=10)
+            agent.wait_for_endpoint(lambda e: e.kind == "subscription" and e.ros_name == "/global_command",
+                                    timeout=10)
+            agent.wait_for_endpoint(lambda e: e.ros_name == "/rm/arm_sim/get_parameters", timeout=10)
+            names = {e.ros_name for e in agent.discovered_topics()}
+            assert "/rm/joint_states" not in names and "/rm/joint_command" not in names
+    finally:
+        node.send_signal(signal.SIGINT)
+        _, err = node.communicate(timeout=10)
+    assert node.returncode == 0, err
+    assert "[rm.arm_sim]" in err
+
+
+def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
+    """A writer whose type has the right name but the wrong layout: our sim cannot decode its
+    samples; it must say so and keep serving well-formed commands."""
+    from dataclasses import dataclass
+
+    from cyclonedds.idl import IdlStruct
+    from cyclonedds.idl import types as idl
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.topic import Topic
+
+    @dataclass
+    class Garbage(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
+        byte: idl.uint8
+
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r", "__ns:=/mal"],
+                              env=env, stderr=subprocess.PIPE, text=True)
+             for kind in ("task_manager", "sim")]
+    try:
+        with ros_agent.Agent(namespace="/mal", domain_id=domain) as agent:
+            states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
+            observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
+            command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
+            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="fastdds")
+            reply = reset.call({"seed": 1, "use_seed": True}, timeout=10)
+            assert reply.success, reply.message
+            first = states.wait_for(None, timeout=10)
+            bad = DataWriter(agent.participant, Topic(agent.participant, "rt/mal/joint_command", Garbage),
+                             qos=ros_agent.QOS_PROFILES["state"].to_dds())
+            time.sleep(0.5)
+            for _ in range(3):
+                bad.write(Garbage(byte=7))
+            command.wait_for_subscribers(1, timeout=10)
+            command.publish(name=list(first.name[:7]), position=list(first.position[:7]))
+            observations.wait_for({"episode": reply.episode, "step": 1}, timeout=10)
+    finally:
+        for p in procs:
+            p.send_signal(signal.SIGINT)
+        errs = [p.communicate(timeout=10)[1] for p in procs]
+    assert all(p.returncode == 0 for p in procs), errs
+    assert "unreadable joint_command dropped" in errs[1], errs[1]
