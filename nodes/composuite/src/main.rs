@@ -1,8 +1,10 @@
 //! `composuite`: the user-facing command of CompoSuite-ROS. Subcommands grow with the suite;
-//! today it lists the 256 tasks and their reference splits, and times whole tasks.
+//! today it lists the 256 tasks and their reference splits, times whole tasks, runs the scripted
+//! expert, and launches the ROS 2 node suite.
 
 mod bench;
 mod expert;
+mod launch;
 mod tasks;
 
 use clap::{Parser, Subcommand};
@@ -21,17 +23,42 @@ enum Command {
     Tasks(tasks::TasksArgs),
     Bench(bench::BenchArgs),
     Expert(expert::ExpertArgs),
+    Launch(launch::LaunchArgs),
+    /// Run one node of the suite (what `launch` starts): `composuite node sim --ros-args ...`.
+    #[command(hide = true, disable_help_flag = true)]
+    Node {
+        /// sim, task_manager or reward.
+        kind: String,
+        /// The node's arguments (`--ros-args ...`, `--help`).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
 }
 
-fn main() {
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Node { kind, args } => {
+            return match composuite_ros::nodes::NodeKind::parse(&kind) {
+                Some(kind) => kind.main(&args),
+                None => {
+                    eprintln!(
+                        "composuite node: `{kind}` is no node; valid: sim, task_manager, reward"
+                    );
+                    std::process::ExitCode::from(2)
+                }
+            };
+        }
+        Command::Launch(args) => launch::run(&args),
         Command::Tasks(args) => tasks::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Expert(args) => expert::run(&args),
     };
-    if let Err(message) = result {
-        eprintln!("composuite: {message}");
-        std::process::exit(2);
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("composuite: {message}");
+            std::process::ExitCode::from(2)
+        }
     }
 }

@@ -14,6 +14,8 @@ pub mod convert;
 pub mod environment;
 pub mod names;
 pub mod node;
+pub mod nodes;
+pub mod param_server;
 pub mod params;
 pub mod qos;
 pub mod reward;

@@ -1,13 +1,12 @@
 //! What every node of the suite shares: start-up from the command line the way rcl does it
 //! (`--ros-args`, `ROS_DOMAIN_ID`, discovery range, parameters), a ros2-client node with its
-//! spinner (graph, parameter services) on a thread of its own, topic/service creation that
+//! parameter services on a thread of their own, topic/service creation that
 //! applies the remaps, a logger that writes to stderr and `/rosout`, and SIGINT/SIGTERM as an
 //! async event so the main loop can shut down cleanly.
 
 use std::fmt;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, Ordering};
-use std::thread::JoinHandle;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use composuite_msgs::{RosMessage, RosService};
@@ -23,6 +22,7 @@ use ros2_client::{
 };
 
 use crate::environment::{DiscoveryRange, RosEnvironment};
+use crate::param_server::{ParameterServices, Parameters};
 use crate::params::{self, ParamSpec};
 use crate::ros_args::{self, RosArgs};
 
@@ -175,7 +175,7 @@ impl NodeSpec {
             about = self.about,
             bin = self.binary
         );
-        for p in self.params {
+        for p in self.all_params() {
             out.push_str(&format!(
                 "  {:<22} {} ({})\n",
                 p.name,
@@ -183,13 +183,12 @@ impl NodeSpec {
                 show_value(&(p.default)())
             ));
         }
+        let first = &self.all_params()[0];
         out.push_str(&format!(
             "\nExample:\n  {} --ros-args -r __ns:=/env_00 -p {}:={}\n",
             self.binary,
-            self.params.first().map_or("use_sim_time", |p| p.name),
-            self.params
-                .first()
-                .map_or("false".to_string(), |p| show_value(&(p.default)()))
+            first.name,
+            show_value(&(first.default)())
         ));
         out
     }
@@ -206,13 +205,28 @@ pub fn show_value(v: &ParameterValue) -> String {
     }
 }
 
-/// A parameter changed through the parameter services.
-#[derive(Debug, Clone)]
-pub struct ParamChange {
-    /// Its name.
-    pub name: String,
-    /// The new value (already checked).
-    pub value: ParameterValue,
+pub use crate::param_server::ParamChange;
+
+/// Parameters every node of the suite has, after its own.
+pub const COMMON_PARAMS: &[ParamSpec] = &[ParamSpec {
+    name: "service_mapping",
+    default: || ParameterValue::String("fastdds".into()),
+    description: "wire format of the node's services (incl. parameter services): fastdds (rmw_fastrtps, Jazzy's default) or cyclone (rmw_cyclonedds); read at start",
+    check: check_mapping,
+}];
+
+fn check_mapping(v: &ParameterValue) -> Result<(), String> {
+    match v {
+        ParameterValue::String(s) => service_mapping(s).map(|_| ()),
+        _ => Err("valid: fastdds, cyclone".into()),
+    }
+}
+
+impl NodeSpec {
+    /// The node's own parameters, then the common ones.
+    pub fn all_params(&self) -> Vec<ParamSpec> {
+        self.params.iter().chain(COMMON_PARAMS).cloned().collect()
+    }
 }
 
 /// A running node: the ros2-client node, its logger, its parameters.
@@ -227,7 +241,11 @@ pub struct RosNode {
     pub environment: RosEnvironment,
     /// Parameter changes made through the parameter services, as they are accepted.
     pub param_changes: async_channel::Receiver<ParamChange>,
-    spinner: Option<JoinHandle<()>>,
+    /// The parameter values (also served by the parameter services).
+    pub parameters: Arc<Parameters>,
+    /// The wire format of this node's services (`service_mapping` parameter).
+    pub service_mapping: ServiceMapping,
+    parameter_services: Option<ParameterServices>,
 }
 
 /// Why a node could not start (bad arguments, bad environment, DDS failure).
@@ -270,8 +288,9 @@ impl RosNode {
         let node_name = NodeName::new(&namespace, &base)
             .map_err(|e| StartError(format!("node name {namespace}/{base}: {e:?}")))?;
         let fully_qualified = node_name.fully_qualified_name();
+        let specs = spec.all_params();
         let (values, unknown) =
-            params::resolve(spec.params, &args, &fully_qualified).map_err(StartError)?;
+            params::resolve(&specs, &args, &fully_qualified).map_err(StartError)?;
         let level = match &args.log_level {
             Some(l) => Level::parse(l.rsplit('=').next().unwrap_or(l)).ok_or_else(|| {
                 StartError(format!(
@@ -291,76 +310,45 @@ impl RosNode {
         let context = Context::from_domain_participant(participant)
             .map_err(|e| StartError(format!("cannot create the ROS context: {e:?}")))?;
 
-        let (change_tx, param_changes) = async_channel::unbounded();
-        let specs: &'static [ParamSpec] = spec.params;
-        let mut options = NodeOptions::new()
+        // No ros2-client spinner (see param_server): parameters are served by our own thread.
+        let options = NodeOptions::new()
             .enable_rosout(true)
-            .start_parameter_services(true)
-            .parameter_validator(Box::new(move |name, value| {
-                match specs.iter().find(|s| s.name == name) {
-                    Some(s) => s.accept(value.clone()).map(|_| ()),
-                    None if name == "use_sim_time" => match value {
-                        ParameterValue::Boolean(false) => Ok(()),
-                        _ => Err("use_sim_time must stay false: this node is the clock".into()),
-                    },
-                    None => Err(format!("`{name}` is not a parameter of this node")),
-                }
-            }))
-            .parameter_set_action(Box::new(move |name, value| {
-                // The channel outlives the node's main loop; a closed one only means shutdown.
-                let _ = change_tx.try_send(ParamChange {
-                    name: name.to_string(),
-                    value: value.clone(),
-                });
-                Ok(())
-            }));
-        for (name, value) in &values {
-            options = options.declare_parameter(name, value.clone());
-        }
+            .start_parameter_services(false);
         let mut node = context
             .new_node(node_name, options)
             .map_err(|e| StartError(format!("cannot create node {fully_qualified}: {e}")))?;
-        // The values declared above went through the set action once; drop those echoes.
-        while param_changes.try_recv().is_ok() {}
         let logger_name = fully_qualified.trim_start_matches('/').replace('/', ".");
         let log = Arc::new(Logger::new(logger_name, level, Some(node.logging_handle())));
         for name in unknown {
             log.warn(format!(
                 "ignoring parameter `{name}`: not a parameter of this node; its parameters are: {}",
-                spec.params
-                    .iter()
-                    .map(|p| p.name)
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                specs.iter().map(|p| p.name).collect::<Vec<_>>().join(", ")
             ));
         }
-        let spinner = node
-            .spinner()
-            .map_err(|e| StartError(format!("cannot start the node's spinner: {e:?}")))?;
-        let spin_log = Arc::clone(&log);
-        let spinner = std::thread::Builder::new()
-            .name("ros-spinner".into())
-            .spawn(move || {
-                if let Err(e) = smol::block_on(spinner.spin()) {
-                    spin_log.error(format!("spinner stopped: {e:?}"));
-                }
-            })
-            .map_err(|e| StartError(format!("cannot start the spinner thread: {e}")))?;
+        let (change_tx, param_changes) = async_channel::unbounded();
+        let parameters = Arc::new(Parameters::new(&specs, values, change_tx));
+        let mapping = match parameters.get("service_mapping") {
+            ParameterValue::String(m) => service_mapping(&m).map_err(StartError)?,
+            _ => ServiceMapping::Enhanced,
+        };
+        let parameter_services =
+            ParameterServices::start(&mut node, mapping, Arc::clone(&parameters))
+                .map_err(StartError)?;
         Ok(Startup::Node(Box::new(RosNode {
             node,
             log,
             args,
             environment,
             param_changes,
-            spinner: Some(spinner),
+            parameters,
+            service_mapping: mapping,
+            parameter_services: Some(parameter_services),
         })))
     }
 
     /// The current value of a declared parameter.
     pub fn param(&self, name: &str) -> ParameterValue {
-        self.node
-            .get_parameter(name)
-            .unwrap_or(ParameterValue::NotSet)
+        self.parameters.get(name)
     }
 
     /// A string parameter.
@@ -470,12 +458,9 @@ impl RosNode {
             .map_err(|e| StartError(format!("service {name}: {e:?}")))
     }
 
-    /// Stop the spinner and wait for its thread.
+    /// Stop the parameter services and wait for their thread.
     pub fn shutdown(mut self) {
-        self.node.stop_spinner();
-        if let Some(handle) = self.spinner.take() {
-            let _ = handle.join();
-        }
+        drop(self.parameter_services.take());
     }
 }
 
@@ -521,13 +506,14 @@ pub fn shutdown_signal() -> std::io::Result<async_channel::Receiver<i32>> {
     Ok(rx)
 }
 
-/// The main of a node binary: start, run `body`, report errors, exit with a code.
+/// The main of a node: start from `argv` (the arguments after the program name), run `body`
+/// until it returns (on SIGINT/SIGTERM), report errors, give the exit code.
 pub fn run_node(
     spec: &NodeSpec,
+    argv: &[String],
     body: impl FnOnce(&mut RosNode, async_channel::Receiver<i32>) -> Result<(), String>,
 ) -> std::process::ExitCode {
-    let argv: Vec<String> = std::env::args().skip(1).collect();
-    let mut node = match RosNode::start(spec, &argv) {
+    let mut node = match RosNode::start(spec, argv) {
         Ok(Startup::Help(text)) => {
             print!("{text}");
             return std::process::ExitCode::SUCCESS;

@@ -39,3 +39,8 @@ pub fn clock() -> QosProfile {
 pub fn services() -> QosProfile {
     state()
 }
+
+/// Parameter services (`rmw_qos_profile_parameters`): reliable, volatile, keep last 1000.
+pub fn parameter_services() -> QosProfile {
+    state().history(History::KeepLast { depth: 1000 })
+}

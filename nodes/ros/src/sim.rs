@@ -115,7 +115,20 @@ struct Running {
     over_reported: bool,
 }
 
+/// Where a step's time goes, summed until it is logged (at debug level, every
+/// [`TIMING_WINDOW`] steps).
+#[derive(Default)]
+struct StepTiming {
+    steps: u32,
+    physics: Duration,
+    publish: Duration,
+}
+
+/// Steps per timing log line.
+const TIMING_WINDOW: u32 = 1000;
+
 struct Sim {
+    timing: StepTiming,
     mode: Mode,
     realtime_factor: f64,
     task_observation: bool,
@@ -159,6 +172,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         sim_time_ns: 0,
         run: None,
         pubs,
+        timing: StepTiming::default(),
     };
     let log = node.log.clone();
     log.info(format!(
@@ -354,11 +368,16 @@ impl Sim {
             joints: run.arm_targets,
             gripper: run.gripper.take(),
         };
-        match run.env.step(&action) {
+        let started = Instant::now();
+        let result = run.env.step(&action);
+        let physics = started.elapsed();
+        match result {
             Ok(step) => {
                 for c in &step.info.clamped {
                     if run.clamp_reported.insert(c.joint.to_string()) {
-                        log.warn(format!("{c} (said once per joint and episode)"));
+                        log.warn(format!(
+                            "target clamped: {c} (said once per joint and episode)"
+                        ));
                     }
                 }
                 if let Some((terminated, truncated)) = run.env.ended() {
@@ -378,7 +397,19 @@ impl Sim {
                     ));
                 }
             }
-            Err(EnvError::EpisodeOver { .. }) if self.mode == Mode::Realtime => return,
+            Err(EnvError::EpisodeOver { .. }) if self.mode == Mode::Realtime => {
+                // The world stands still until the next episode; time and joint_states go on.
+                let run = self.run.as_ref().expect("checked above");
+                let world_msg = convert::world_state(
+                    &run.env.world_state(),
+                    convert::time_from_nanos(self.sim_time_ns),
+                    run.episode,
+                    run.env.steps(),
+                );
+                self.advance_clock();
+                self.publish_robot_state(&world_msg);
+                return;
+            }
             Err(err @ EnvError::EpisodeOver { .. }) => {
                 if !run.over_reported {
                     run.over_reported = true;
@@ -395,6 +426,19 @@ impl Sim {
         }
         self.advance_clock();
         self.publish_state();
+        let t = &mut self.timing;
+        t.steps += 1;
+        t.physics += physics;
+        t.publish += started.elapsed() - physics;
+        if t.steps == TIMING_WINDOW {
+            log.debug(format!(
+                "last {} steps: physics {:.0} µs, publishing {:.0} µs per step",
+                t.steps,
+                t.physics.as_secs_f64() * 1e6 / t.steps as f64,
+                t.publish.as_secs_f64() * 1e6 / t.steps as f64
+            ));
+            *t = StepTiming::default();
+        }
     }
 
     fn advance_clock(&mut self) {
@@ -404,14 +448,15 @@ impl Sim {
         }
     }
 
-    /// Publish everything that describes the world now, stamped with the sim time.
+    /// Publish everything that describes the world now, stamped with the sim time: the
+    /// episode's step (`world_state` first — the reward node's input — then `observation`),
+    /// then the robot's state for ROS tools.
     fn publish_state(&self) {
         let Some(run) = &self.run else { return };
         let env = &run.env;
         let stamp = convert::time_from_nanos(self.sim_time_ns);
         let step = env.steps();
-        let world = env.world_state();
-        let world_msg = convert::world_state(&world, stamp.clone(), run.episode, step);
+        let world_msg = convert::world_state(&env.world_state(), stamp.clone(), run.episode, step);
         // Publishing only fails when DDS is shutting down; the next step tries again.
         let _ = self.pubs.world_state.publish(world_msg.clone());
         let _ = self.pubs.observation.publish(convert::observation(
@@ -420,14 +465,22 @@ impl Sim {
             run.episode,
             step,
         ));
+        self.publish_robot_state(&world_msg);
+    }
+
+    /// `joint_states`, `tf` and `clock` (also while a realtime episode is over, so ROS tools
+    /// keep seeing a live robot).
+    fn publish_robot_state(&self, world_msg: &msg::WorldState) {
+        let Some(run) = &self.run else { return };
+        let env = &run.env;
+        let stamp = convert::time_from_nanos(self.sim_time_ns);
         let w = env.world();
-        let model = w.model;
         let mut positions = w.arm_positions().to_vec();
         positions.extend(w.finger_positions());
         let mut velocities = w.arm_velocities().to_vec();
         velocities.extend([w.joint_velocity(ARM_DOF), w.joint_velocity(ARM_DOF + 1)]);
         let _ = self.pubs.joint_states.publish(convert::joint_state(
-            model,
+            w.model,
             &positions,
             &velocities,
             stamp.clone(),

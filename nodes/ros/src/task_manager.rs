@@ -21,7 +21,7 @@ use ros2_client::dds::{Publisher, Server};
 
 use crate::convert;
 use crate::names;
-use crate::node::{Logger, ParamChange, RosNode, service_mapping};
+use crate::node::{Logger, ParamChange, RosNode};
 use crate::params::{ParamSpec, any_value};
 use crate::qos;
 
@@ -46,13 +46,6 @@ fn check_horizon(v: &ParameterValue) -> Result<(), String> {
     match v {
         ParameterValue::Integer(h) if (1..=u32::MAX as i64).contains(h) => Ok(()),
         _ => Err("the horizon is a number of control steps >= 1".into()),
-    }
-}
-
-fn check_mapping(v: &ParameterValue) -> Result<(), String> {
-    match v {
-        ParameterValue::String(s) => service_mapping(s).map(|_| ()),
-        _ => Err("valid: fastdds, cyclone".into()),
     }
 }
 
@@ -82,12 +75,6 @@ pub const PARAMS: &[ParamSpec] = &[
         default: || ParameterValue::Integer(500),
         description: "control steps per episode",
         check: check_horizon,
-    },
-    ParamSpec {
-        name: "service_mapping",
-        default: || ParameterValue::String("fastdds".into()),
-        description: "service wire format: fastdds (rmw_fastrtps, Jazzy's default) or cyclone (rmw_cyclonedds); read at start",
-        check: check_mapping,
     },
     ParamSpec {
         name: "auto_reset",
@@ -141,7 +128,7 @@ struct TaskManager {
 /// Run the task manager until SIGINT/SIGTERM.
 pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<(), String> {
     let e = |e: crate::node::StartError| e.to_string();
-    let mapping = service_mapping(&node.param_string("service_mapping"))?;
+    let mapping = node.service_mapping;
     let scene = node.publisher(names::SCENE, qos::latched()).map_err(e)?;
     let status = node.publisher(names::EPISODE, qos::state()).map_err(e)?;
     let world_sub = node

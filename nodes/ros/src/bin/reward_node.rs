@@ -1,14 +1,6 @@
-//! `reward_node`: see [`composuite_ros::reward`].
-
-use composuite_ros::node::{NodeSpec, run_node};
-
-const SPEC: NodeSpec = NodeSpec {
-    name: "reward",
-    binary: "reward_node",
-    about: "CompoSuite-ROS reward node: the staged reward of every step (from scene + world_state) on reward, and success.",
-    params: composuite_ros::reward::PARAMS,
-};
+//! `reward_node`: the reward node as its own binary (`--help` for its parameters).
 
 fn main() -> std::process::ExitCode {
-    run_node(&SPEC, composuite_ros::reward::run)
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    composuite_ros::nodes::NodeKind::Reward.main(&argv)
 }

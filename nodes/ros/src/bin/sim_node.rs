@@ -1,14 +1,6 @@
-//! `sim_node`: see [`composuite_ros::sim`].
-
-use composuite_ros::node::{NodeSpec, run_node};
-
-const SPEC: NodeSpec = NodeSpec {
-    name: "sim",
-    binary: "sim_node",
-    about: "CompoSuite-ROS sim node: owns the physics world of one environment; steps it on joint_command (lockstep) or on the wall clock (realtime); publishes joint_states, observation, world_state, clock, tf, robot_description.",
-    params: composuite_ros::sim::PARAMS,
-};
+//! `sim_node`: the sim node as its own binary (`--help` for its parameters).
 
 fn main() -> std::process::ExitCode {
-    run_node(&SPEC, composuite_ros::sim::run)
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    composuite_ros::nodes::NodeKind::Sim.main(&argv)
 }

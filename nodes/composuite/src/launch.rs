@@ -1,0 +1,312 @@
+//! `composuite launch`: the node suite headless. Every environment is the three nodes
+//! (task_manager, sim, reward) as child processes in a namespace of its own; signals are passed
+//! on, and when one node dies or time is up, every node is stopped (SIGINT, then SIGKILL after a
+//! grace period) and the launcher exits with a code that says what happened.
+//!
+//! The children are this same executable run as `composuite node KIND --ros-args ...`, so the
+//! launcher never looks for binaries on a path.
+
+use std::path::PathBuf;
+use std::process::{Child, Command, ExitStatus};
+use std::time::{Duration, Instant};
+
+use clap::Args;
+use composuite_core::TaskSpec;
+use composuite_ros::nodes::NodeKind;
+use composuite_ros::ros_args::is_valid_name;
+
+/// How long nodes get to exit after SIGINT before they are killed.
+const GRACE: Duration = Duration::from_secs(5);
+
+/// Start the node suite headless: N environments × (task_manager, sim, reward).
+///
+/// Each environment lives in its own namespace: with `--envs 1` the namespace given (default
+/// `/`), with more `NS/env_00`, `NS/env_01`, ... Environment i starts at seed `--seed` + i.
+/// Ctrl-C (or SIGTERM) stops everything cleanly. DDS settings come from the environment as for
+/// any ROS 2 node (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE).
+///
+/// Example: composuite launch --task Panda/plate/goal_wall/trash_can --mode lockstep --envs 2
+/// --namespace /train
+#[derive(Args, Debug)]
+pub struct LaunchArgs {
+    /// Task of the first episode, robot/object/obstacle/objective (any spelling of each axis)
+    /// [default: IIWA/box/no_obstacle/pick_place].
+    #[arg(long)]
+    task: Option<String>,
+    /// lockstep (one control period per joint_command) or realtime (wall-clock pace)
+    /// [default: lockstep].
+    #[arg(long)]
+    mode: Option<String>,
+    /// Namespace of the environment(s), e.g. /train.
+    #[arg(long, default_value = "/")]
+    namespace: String,
+    /// Number of environments.
+    #[arg(long, default_value_t = 1)]
+    envs: usize,
+    /// Seed of the first episode (environment i: seed + i) [default: 0].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Control steps per episode [default: 500].
+    #[arg(long)]
+    horizon: Option<u32>,
+    /// Service wire format: fastdds (rmw_fastrtps, Jazzy's default) or cyclone (rmw_cyclonedds)
+    /// [default: fastdds].
+    #[arg(long)]
+    service_mapping: Option<String>,
+    /// Start the next episode as soon as one ends.
+    #[arg(long)]
+    auto_reset: bool,
+    /// A parameters file (`/**: ros__parameters:` form) given to every node; the options above,
+    /// when given, win over it.
+    #[arg(long)]
+    params_file: Option<PathBuf>,
+    /// Log level of the nodes: debug, info, warn, error, fatal.
+    #[arg(long, default_value = "info")]
+    log_level: String,
+    /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+struct Running {
+    kind: NodeKind,
+    namespace: String,
+    child: Child,
+}
+
+/// The namespace of environment `index` of `count`.
+fn env_namespace(base: &str, index: usize, count: usize) -> String {
+    let base = base.trim_end_matches('/');
+    if count == 1 {
+        if base.is_empty() {
+            "/".into()
+        } else {
+            base.into()
+        }
+    } else {
+        format!("{base}/env_{index:02}")
+    }
+}
+
+fn validate(args: &LaunchArgs) -> Result<(), String> {
+    if let Some(task) = &args.task {
+        task.parse::<TaskSpec>()
+            .map_err(|e| format!("--task: {e}"))?;
+    }
+    if let Some(mode) = &args.mode
+        && composuite_ros::sim::Mode::parse(mode).is_none()
+    {
+        return Err(format!(
+            "--mode {mode} is invalid; valid: lockstep, realtime"
+        ));
+    }
+    if let Some(mapping) = &args.service_mapping {
+        composuite_ros::node::service_mapping(mapping)
+            .map_err(|e| format!("--service-mapping: {e}"))?;
+    }
+    let namespace_ok = args.namespace == "/"
+        || (args.namespace.starts_with('/') && is_valid_name(&args.namespace, true));
+    if !namespace_ok {
+        return Err(format!(
+            "--namespace {} is invalid; it must be absolute, e.g. /train",
+            args.namespace
+        ));
+    }
+    if !(1..=100).contains(&args.envs) {
+        return Err(format!("--envs {} is invalid; valid: 1 to 100", args.envs));
+    }
+    if args.horizon == Some(0) {
+        return Err("--horizon must be at least 1".into());
+    }
+    if let Some(d) = args.duration
+        && !(d.is_finite() && d > 0.0)
+    {
+        return Err(format!("--duration {d} is invalid; seconds > 0"));
+    }
+    if let Some(f) = &args.params_file
+        && !f.is_file()
+    {
+        return Err(format!("--params-file {}: no such file", f.display()));
+    }
+    Ok(())
+}
+
+/// The `--ros-args` of one node.
+fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usize) -> Vec<String> {
+    let mut out = vec![
+        "--ros-args".to_string(),
+        "-r".into(),
+        format!("__ns:={namespace}"),
+    ];
+    if let Some(file) = &args.params_file {
+        out.extend(["--params-file".into(), file.display().to_string()]);
+    }
+    let mut param = |name: &str, value: String| {
+        out.extend(["-p".into(), format!("{name}:={value}")]);
+    };
+    // Only what was asked for: anything else comes from the params file or the defaults.
+    if let Some(mapping) = &args.service_mapping {
+        param("service_mapping", mapping.clone());
+    }
+    match kind {
+        NodeKind::Sim => {
+            if let Some(mode) = &args.mode {
+                param("mode", mode.clone());
+            }
+        }
+        NodeKind::TaskManager => {
+            if let Some(task) = &args.task {
+                param("task", task.clone());
+            }
+            if args.seed.is_some() || index > 0 {
+                param("seed", (args.seed.unwrap_or(0) + index as u64).to_string());
+            }
+            if let Some(horizon) = args.horizon {
+                param("horizon", horizon.to_string());
+            }
+            if args.auto_reset {
+                param("auto_reset", "true".into());
+            }
+        }
+        NodeKind::Reward => {}
+    }
+    out.extend(["--log-level".into(), args.log_level.clone()]);
+    out
+}
+
+/// Send `signal` to a child (it may have exited already; that is fine).
+fn signal(child: &Child, signal: i32) {
+    // SAFETY: kill(2) on a pid we spawned; no memory is touched.
+    unsafe {
+        libc::kill(child.id() as libc::pid_t, signal);
+    }
+}
+
+/// Run the suite until a signal, `--duration`, or a node's death.
+pub fn run(args: &LaunchArgs) -> Result<(), String> {
+    validate(args)?;
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
+    let signals = composuite_ros::node::shutdown_signal()
+        .map_err(|e| format!("cannot watch for signals: {e}"))?;
+    let mut nodes: Vec<Running> = Vec::new();
+    for index in 0..args.envs {
+        let namespace = env_namespace(&args.namespace, index, args.envs);
+        for kind in NodeKind::ALL {
+            let child = Command::new(&exe)
+                .arg("node")
+                .arg(kind.name())
+                .args(node_arguments(args, kind, &namespace, index))
+                .spawn();
+            match child {
+                Ok(child) => nodes.push(Running {
+                    kind,
+                    namespace: namespace.clone(),
+                    child,
+                }),
+                Err(e) => {
+                    stop_all(&mut nodes);
+                    return Err(format!("cannot start {kind} in {namespace}: {e}"));
+                }
+            }
+        }
+    }
+    eprintln!(
+        "composuite launch: {} environment(s) × 3 nodes started; Ctrl-C stops them",
+        args.envs
+    );
+    let deadline = args
+        .duration
+        .map(|d| Instant::now() + Duration::from_secs_f64(d));
+    let outcome = loop {
+        if let Ok(sig) = signals.try_recv() {
+            eprintln!("composuite launch: signal {sig}, stopping the nodes");
+            break Ok(());
+        }
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            eprintln!("composuite launch: --duration reached, stopping the nodes");
+            break Ok(());
+        }
+        let died = nodes.iter_mut().find_map(|n| match n.child.try_wait() {
+            Ok(Some(status)) => Some(format!(
+                "{} in {} exited on its own ({})",
+                n.kind,
+                n.namespace,
+                describe(status)
+            )),
+            _ => None,
+        });
+        if let Some(what) = died {
+            break Err(format!("{what}; stopped the others"));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let clean = stop_all(&mut nodes);
+    match outcome {
+        Err(e) => Err(e),
+        Ok(()) if clean => Ok(()),
+        Ok(()) => Err("some nodes did not shut down cleanly (see above)".into()),
+    }
+}
+
+fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(code), _) => format!("exit code {code}"),
+        (None, Some(sig)) => format!("killed by signal {sig}"),
+        _ => "unknown status".into(),
+    }
+}
+
+/// SIGINT to every node still running, wait up to [`GRACE`], SIGKILL the rest. True when all
+/// exited with code 0.
+fn stop_all(nodes: &mut [Running]) -> bool {
+    for n in nodes.iter() {
+        signal(&n.child, libc::SIGINT);
+    }
+    let until = Instant::now() + GRACE;
+    let mut clean = true;
+    for n in nodes.iter_mut() {
+        let status = loop {
+            match n.child.try_wait() {
+                Ok(Some(status)) => break Some(status),
+                Ok(None) if Instant::now() < until => std::thread::sleep(Duration::from_millis(20)),
+                _ => break None,
+            }
+        };
+        match status {
+            Some(s) if s.success() => {}
+            Some(s) => {
+                clean = false;
+                eprintln!(
+                    "composuite launch: {} in {}: {}",
+                    n.kind,
+                    n.namespace,
+                    describe(s)
+                );
+            }
+            None => {
+                clean = false;
+                eprintln!(
+                    "composuite launch: {} in {} did not stop within {:?}; killing it",
+                    n.kind, n.namespace, GRACE
+                );
+                signal(&n.child, libc::SIGKILL);
+                let _ = n.child.wait();
+            }
+        }
+    }
+    clean
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn namespaces_per_environment() {
+        assert_eq!(env_namespace("/", 0, 1), "/");
+        assert_eq!(env_namespace("/train", 0, 1), "/train");
+        assert_eq!(env_namespace("/", 3, 4), "/env_03");
+        assert_eq!(env_namespace("/train/", 1, 2), "/train/env_01");
+    }
+}

@@ -1,0 +1,85 @@
+//! The suite's three nodes by kind: their specs (name, help, parameters) and mains, shared by
+//! the `*_node` binaries and `composuite launch` (which runs each node as `composuite node KIND`).
+
+use std::fmt;
+use std::process::ExitCode;
+
+use crate::node::{NodeSpec, run_node};
+
+/// One of the suite's nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeKind {
+    /// Physics, joint states, observations.
+    Sim,
+    /// Scenes, episodes, services.
+    TaskManager,
+    /// Staged rewards and success.
+    Reward,
+}
+
+impl NodeKind {
+    /// Every node of an environment, in start order (the task manager's latched scene first).
+    pub const ALL: [NodeKind; 3] = [NodeKind::TaskManager, NodeKind::Sim, NodeKind::Reward];
+
+    /// The node's default name (`sim`, `task_manager`, `reward`).
+    pub fn name(self) -> &'static str {
+        self.spec().name
+    }
+
+    /// `sim` / `task_manager` / `reward` (and `*_node`).
+    pub fn parse(s: &str) -> Option<NodeKind> {
+        NodeKind::ALL
+            .into_iter()
+            .find(|k| s == k.name() || s == k.spec().binary)
+    }
+
+    /// Name, help text and parameters.
+    pub fn spec(self) -> &'static NodeSpec {
+        match self {
+            NodeKind::Sim => &SIM,
+            NodeKind::TaskManager => &TASK_MANAGER,
+            NodeKind::Reward => &REWARD,
+        }
+    }
+
+    /// Run the node with `argv` (the arguments after the program name) until a signal stops it.
+    pub fn main(self, argv: &[String]) -> ExitCode {
+        match self {
+            NodeKind::Sim => run_node(&SIM, argv, crate::sim::run),
+            NodeKind::TaskManager => run_node(&TASK_MANAGER, argv, crate::task_manager::run),
+            NodeKind::Reward => run_node(&REWARD, argv, crate::reward::run),
+        }
+    }
+}
+
+impl fmt::Display for NodeKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+const SIM: NodeSpec = NodeSpec {
+    name: "sim",
+    binary: "sim_node",
+    about: "CompoSuite-ROS sim node: owns the physics world of one environment; steps it on \
+            joint_command (lockstep) or on the wall clock (realtime); publishes joint_states, \
+            observation, world_state, clock, tf and robot_description.",
+    params: crate::sim::PARAMS,
+};
+
+const TASK_MANAGER: NodeSpec = NodeSpec {
+    name: "task_manager",
+    binary: "task_manager_node",
+    about: "CompoSuite-ROS task manager node: composes and publishes the scene (one per \
+            episode), follows episodes and publishes episode; serves set_task, reset and \
+            sample_tasks.",
+    params: crate::task_manager::PARAMS,
+};
+
+const REWARD: NodeSpec = NodeSpec {
+    name: "reward",
+    binary: "reward_node",
+    about: "CompoSuite-ROS reward node: the staged reward of every step (from scene + \
+            world_state) on reward, and the success flag on success.",
+    params: crate::reward::PARAMS,
+};

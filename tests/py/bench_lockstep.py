@@ -1,0 +1,135 @@
+"""Lockstep benchmark of the node suite with a Python cyclonedds agent (what rmw_cyclonedds puts
+on the wire), for the reference benchmark's four tasks.
+
+An agent step is what an RL loop does: publish `joint_command`, then wait for the observation
+AND the reward of that step (matched by episode and step, never "the latest"). Per task: launch
+the suite (`composuite launch --service-mapping cyclone`), reset through the service, run the
+steps (reset every 500 = the horizon), print env steps/s and the step latency median and p99.
+
+Run inside the loopback-only namespace; `scripts/bench-ros` does that and builds the release
+binaries first. Figures only — nothing is asserted.
+
+    python tests/py/bench_lockstep.py --composuite target/release/composuite --steps 2000
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import signal
+import statistics
+import subprocess
+import sys
+import time
+
+import ros_agent
+
+REFERENCE_TASKS = [
+    "IIWA/box/no_obstacle/pick_place",
+    "Jaco/dumbbell/object_door/shelf",
+    "Panda/plate/goal_wall/trash_can",
+    "Gen3/hollow_box/object_wall/push",
+]
+ARM_JOINTS = 7
+WAIT_FOR_REWARD = os.environ.get("BENCH_OBSERVATION_ONLY") != "1"
+
+
+def bench_task(composuite: str, task: str, steps: int, horizon: int) -> dict:
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    suite = subprocess.Popen(
+        [composuite, "launch", "--task", task, "--service-mapping", "cyclone",
+         "--horizon", str(horizon), "--namespace", "/bench", "--log-level", os.environ.get("BENCH_LOG_LEVEL", "warn")],
+        env=env, stderr=subprocess.PIPE, text=True)
+    try:
+        with ros_agent.Agent(namespace="/bench", domain_id=domain) as agent:
+            states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
+            observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
+            rewards = agent.subscribe("reward", "composuite_msgs/msg/StagedReward")
+            command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
+            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="cyclone")
+            reset.wait_for_service(timeout=20)
+            command.wait_for_subscribers(1, timeout=20)
+            observations.wait_for_publishers(timeout=20)
+            rewards.wait_for_publishers(timeout=20)
+            # joint_states is published at each reset and step: start an episode to see one.
+            reset.call({"seed": 0, "use_seed": True}, timeout=10)
+            first = states.wait_for(None, timeout=20)
+            names = list(first.name[:ARM_JOINTS])
+            home = list(first.position[:ARM_JOINTS])
+            rng = random.Random(7)
+            latencies: list[float] = []
+            reset_times: list[float] = []
+            done = 0
+            t_start = time.perf_counter()
+            while done < steps:
+                t0 = time.perf_counter()
+                reply = reset.call({"seed": done // horizon, "use_seed": True}, timeout=10)
+                reset_times.append(time.perf_counter() - t0)
+                assert reply.success, reply.message
+                episode = reply.episode
+                for k in range(1, min(horizon, steps - done) + 1):
+                    targets = [q + rng.uniform(-0.05, 0.05) for q in home]
+                    o_start, r_start = len(observations.samples), len(rewards.samples)
+                    t0 = time.perf_counter()
+                    command.publish(name=names, position=targets)
+                    observations.wait_for({"episode": episode, "step": k}, timeout=5, start=o_start)
+                    if WAIT_FOR_REWARD:
+                        rewards.wait_for({"episode": episode, "step": k}, timeout=5, start=r_start)
+                    latencies.append(time.perf_counter() - t0)
+                    done += 1
+                # Keep memory flat over long runs.
+                observations.clear()
+                rewards.clear()
+                states.clear()
+            wall = time.perf_counter() - t_start
+    finally:
+        suite.send_signal(signal.SIGINT)
+        try:
+            _, err = suite.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            suite.kill()
+            _, err = suite.communicate()
+        if suite.returncode != 0:
+            print(f"launch exited {suite.returncode}: {err[-2000:]}", file=sys.stderr)
+        # With BENCH_LOG_LEVEL=debug the sim reports where its step time goes.
+        for line in err.splitlines():
+            if "steps: physics" in line:
+                print(line, file=sys.stderr)
+    latencies.sort()
+    return {
+        "task": task,
+        "steps": len(latencies),
+        "steps_per_s": len(latencies) / sum(latencies),
+        "wall_steps_per_s": len(latencies) / wall,
+        "median_ms": statistics.median(latencies) * 1e3,
+        "p99_ms": latencies[int(0.99 * (len(latencies) - 1))] * 1e3,
+        "reset_ms": statistics.median(reset_times) * 1e3,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--composuite", required=True, help="path of the (release) composuite binary")
+    parser.add_argument("--steps", type=int, default=2000, help="agent steps per task")
+    parser.add_argument("--horizon", type=int, default=500, help="steps per episode")
+    parser.add_argument("--tasks", nargs="*", default=REFERENCE_TASKS)
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    args = parser.parse_args()
+    results = []
+    for task in args.tasks:
+        print(f"bench: {task} ...", file=sys.stderr, flush=True)
+        results.append(bench_task(args.composuite, task, args.steps, args.horizon))
+    if args.json:
+        print(json.dumps(results, indent=1))
+        return
+    print(f"{'task':<36} {'steps/s':>8} {'(wall)':>8} {'median ms':>10} {'p99 ms':>8} {'reset ms':>9}")
+    for r in results:
+        print(f"{r['task']:<36} {r['steps_per_s']:>8.0f} {r['wall_steps_per_s']:>8.0f} "
+              f"{r['median_ms']:>10.3f} {r['p99_ms']:>8.3f} {r['reset_ms']:>9.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,174 @@
+"""Start and stop the three node binaries (task_manager_node, sim_node, reward_node) of one
+environment for the integration tests, and run the in-process reference `env_replay`.
+
+Binaries come from $COMPOSUITE_NODE_DIR (default: the cargo target directory's debug build,
+$CARGO_TARGET_DIR/debug or target/debug); `env_replay` from $COMPOSUITE_ENV_REPLAY (default:
+<node dir>/examples/env_replay). The test command (scripts/test) sets both.
+
+Only use it inside scripts/netns-isolate (or netns-run): the nodes speak DDS."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import struct
+import subprocess
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+NODES = ("task_manager", "sim", "reward")
+# Seconds a node gets to exit after SIGINT.
+SHUTDOWN_TIMEOUT = 5.0
+
+
+def node_dir() -> Path:
+    path = os.environ.get("COMPOSUITE_NODE_DIR")
+    if not path:
+        target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
+        path = str(target / "debug")
+    return Path(path)
+
+
+def binary(node: str) -> Path:
+    path = node_dir() / f"{node}_node"
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"{path} not found: build with `cargo build -p composuite_ros --bins` or set COMPOSUITE_NODE_DIR")
+    return path
+
+
+def env_replay_path() -> Path:
+    path = Path(os.environ.get("COMPOSUITE_ENV_REPLAY") or node_dir() / "examples" / "env_replay")
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"{path} not found: build with `cargo build -p composuite_ros --example env_replay` "
+            "or set COMPOSUITE_ENV_REPLAY")
+    return path
+
+
+def env_replay_run(episode: dict) -> list[dict]:
+    """`env_replay run` on an episode description: one dict per step, step 0 (reset) first."""
+    result = subprocess.run([str(env_replay_path()), "run"], input=json.dumps(episode),
+                            capture_output=True, text=True, check=False, timeout=120)
+    if result.returncode != 0:
+        raise RuntimeError(f"env_replay run failed: {result.stderr}")
+    return [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
+
+
+def env_replay_expert(task: str, seed: int) -> dict:
+    result = subprocess.run([str(env_replay_path()), "expert", task, str(seed)],
+                            capture_output=True, text=True, check=False, timeout=120)
+    if result.returncode != 0:
+        raise RuntimeError(f"env_replay expert failed: {result.stderr}")
+    return json.loads(result.stdout)
+
+
+def float_bits(values) -> list[str]:
+    """The IEEE-754 bits of each float as hex: equal lists mean bit-identical values (NaNs and
+    signed zeros included), which `==` on floats does not tell."""
+    return [struct.pack("<d", float(v)).hex() for v in values]
+
+
+def require_isolation() -> None:
+    """Fail unless this process sees only the loopback interface (netns-isolate / netns-run)."""
+    names = sorted(name for _, name in socket.if_nameindex())
+    if names != ["lo"]:
+        raise RuntimeError(f"DDS tests must run inside scripts/netns-isolate (interfaces here: {names})")
+
+
+class Suite:
+    """The three nodes of one environment in `namespace`, each with its stderr in a file.
+
+        suite = Suite(tmp_dir, "/t1", domain_id, task_manager={"service_mapping": "cyclone"})
+        ...
+        suite.stop()   # SIGINT, then asserts every node exited 0 within SHUTDOWN_TIMEOUT
+    """
+
+    def __init__(self, log_dir: Path, namespace: str, domain_id: int, **params: dict[str, object]):
+        unknown = set(params) - set(NODES)
+        if unknown:
+            raise ValueError(f"parameters for unknown node(s) {sorted(unknown)}; nodes: {NODES}")
+        self.namespace, self.domain_id = namespace, domain_id
+        self.log_dir = Path(log_dir)
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        env = {k: v for k, v in os.environ.items()
+               if not k.startswith("ROS_") and k not in ("RMW_IMPLEMENTATION",)}
+        env["ROS_DOMAIN_ID"] = str(domain_id)
+        self.processes: dict[str, subprocess.Popen] = {}
+        self.stderr_paths: dict[str, Path] = {}
+        try:
+            for node in NODES:
+                args = [str(binary(node)), "--ros-args", "-r", f"__ns:={namespace}"]
+                for name, value in params.get(node, {}).items():
+                    if isinstance(value, bool):
+                        value = "true" if value else "false"
+                    args += ["-p", f"{name}:={value}"]
+                path = self.log_dir / f"{namespace.strip('/').replace('/', '_')}_{node}.stderr"
+                self.stderr_paths[node] = path
+                with open(path, "wb") as stderr:
+                    self.processes[node] = subprocess.Popen(
+                        args, stdin=subprocess.DEVNULL, stdout=stderr, stderr=stderr, env=env)
+        except BaseException:
+            self.kill()
+            raise
+
+    def wait_until_up(self, timeout: float = 10.0) -> None:
+        """Until every node has said it is up (its DDS participant and endpoints exist). An agent
+        made before that announces itself to nobody and is found only at the next periodic
+        announcement, seconds later."""
+        for node in NODES:
+            self.wait_for_log(node, f"{self.namespace}/{node} up", timeout)
+
+    def stderr(self, node: str) -> str:
+        return self.stderr_paths[node].read_text(errors="replace")
+
+    def all_stderr(self) -> str:
+        return "\n".join(f"---- {node} (exit {self.processes[node].poll()}) ----\n{self.stderr(node)}"
+                         for node in self.processes)
+
+    def assert_running(self) -> None:
+        dead = {n: p.poll() for n, p in self.processes.items() if p.poll() is not None}
+        assert not dead, f"node(s) exited: {dead}\n{self.all_stderr()}"
+
+    def wait_for_log(self, node: str, text: str, timeout: float = 5.0, since: int = 0) -> str:
+        """The node's stderr from character `since` on, once that part contains `text` (lines
+        are written as they are logged)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            log = self.stderr(node)[since:]
+            if text in log:
+                return log
+            if time.monotonic() >= deadline:
+                raise AssertionError(f"{node}'s stderr never said {text!r} within {timeout} s:\n{log}")
+            time.sleep(0.02)
+
+    def stop(self) -> dict[str, int | None]:
+        """SIGINT to every node; the exit status of each (None = still running after the
+        timeout, then killed)."""
+        for process in self.processes.values():
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + SHUTDOWN_TIMEOUT
+        codes: dict[str, int | None] = {}
+        for node, process in self.processes.items():
+            try:
+                codes[node] = process.wait(timeout=max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                codes[node] = None
+        self.kill()
+        return codes
+
+    def stop_and_check(self) -> None:
+        codes = self.stop()
+        bad = {n: c for n, c in codes.items() if c != 0}
+        assert not bad, (f"unclean shutdown after SIGINT (None = still running after "
+                         f"{SHUTDOWN_TIMEOUT} s): {bad}\n{self.all_stderr()}")
+
+    def kill(self) -> None:
+        for process in self.processes.values():
+            if process.poll() is None:
+                process.kill()
+                process.wait()

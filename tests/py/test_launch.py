@@ -1,0 +1,252 @@
+"""`composuite launch`, the params files and the `ros2 launch` file.
+
+The launcher is driven as a user would (a subprocess, signals), and watched with the cyclonedds
+agent over real DDS, inside the loopback-only namespace the test command provides. (No
+`from __future__ import annotations` here: cyclonedds IDL classes need real annotation objects.)"""
+
+import ast
+import os
+import random
+import re
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+import ros_agent
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def bin_dir() -> Path:
+    path = os.environ.get("COMPOSUITE_NODE_DIR")
+    if not path:
+        target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
+        path = str(target / "debug")
+    return Path(path)
+
+
+def composuite() -> str:
+    exe = bin_dir() / "composuite"
+    if not exe.is_file():
+        raise FileNotFoundError(f"{exe} not found: build with `cargo build -p composuite`")
+    return str(exe)
+
+
+def node_processes(marker: str) -> list[int]:
+    """Pids of `composuite node` processes whose command line contains `marker`."""
+    pids = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            cmdline = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if " node " in cmdline and marker in cmdline:
+            pids.append(int(proc.name))
+    return pids
+
+
+def launch(*args: str, domain: int) -> subprocess.Popen:
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    return subprocess.Popen([composuite(), "launch", *args], env=env,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def test_two_realtime_environments_run_and_stop_cleanly_on_sigterm():
+    domain = random.randint(1, 200)
+    suite = launch("--envs", "2", "--namespace", "/lt", "--params-file",
+                   str(REPO / "params/realtime.yaml"), "--log-level", "warn", domain=domain)
+    try:
+        with ros_agent.Agent(namespace="/lt/env_01", domain_id=domain) as agent:
+            states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
+            clock = agent.subscribe("clock", "rosgraph_msgs/msg/Clock", qos="clock")
+            states.wait_for_publishers(timeout=20)
+            first = states.wait_for(None, timeout=20)
+            t0 = time.monotonic()
+            time.sleep(1.0)
+            later = [s for s in states.samples if s is not first]
+            rate = len(later) / (time.monotonic() - t0)
+            # Realtime mode: 20 Hz control steps on the wall clock, the last targets held.
+            assert 10 <= rate <= 30, f"joint_states at {rate:.1f} Hz"
+            stamps = [c.clock.sec + c.clock.nanosec * 1e-9 for c in clock.samples]
+            assert stamps == sorted(stamps) and stamps[-1] > stamps[0]
+            topics = {e.ros_name for e in agent.discovered_topics() if e.kind == "publication"}
+            for ns in ("/lt/env_00", "/lt/env_01"):
+                for topic in ("joint_states", "observation", "reward", "episode", "scene"):
+                    assert f"{ns}/{topic}" in topics, sorted(topics)
+        assert len(node_processes("__ns:=/lt/env_0")) == 6
+    finally:
+        suite.send_signal(signal.SIGTERM)
+        _, err = suite.communicate(timeout=15)
+    assert suite.returncode == 0, err
+    assert "signal 15" in err
+    assert node_processes("__ns:=/lt/env_0") == [], "nodes left running"
+
+
+def test_a_dying_node_stops_the_suite_with_an_error():
+    domain = random.randint(1, 200)
+    suite = launch("--namespace", "/die", "--log-level", "warn", domain=domain)
+    try:
+        deadline = time.monotonic() + 20
+        while len(node_processes("__ns:=/die")) < 3:
+            assert time.monotonic() < deadline, "the three nodes did not start"
+            time.sleep(0.1)
+        sim = [p for p in node_processes("__ns:=/die") if Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")[2] == b"sim"]
+        os.kill(sim[0], signal.SIGKILL)
+        _, err = suite.communicate(timeout=15)
+    finally:
+        if suite.poll() is None:
+            suite.kill()
+    assert suite.returncode != 0
+    assert "sim in /die exited on its own (killed by signal 9)" in err, err
+    assert node_processes("__ns:=/die") == []
+
+
+def test_bad_launch_options_are_refused_with_the_valid_choices():
+    for args, expected in [
+        (["--task", "IIWA/box/no_obstacle/fly"], "valid: pick_place, push, trash_can, shelf"),
+        (["--mode", "fast"], "valid: lockstep, realtime"),
+        (["--service-mapping", "zenoh"], "valid: fastdds"),
+        (["--namespace", "env"], "must be absolute"),
+        (["--envs", "0"], "valid: 1 to 100"),
+    ]:
+        result = subprocess.run([composuite(), "launch", *args], capture_output=True, text=True, timeout=20)
+        assert result.returncode == 2, (args, result.stderr)
+        assert expected in result.stderr, (args, result.stderr)
+
+
+def node_defaults(binary: str) -> dict[str, str]:
+    """Parameter defaults as the node's --help prints them: `  name  description (default)`."""
+    text = subprocess.run([str(bin_dir() / binary), "--help"], capture_output=True, text=True,
+                          check=True).stdout
+    section = text.split("Parameters (default):")[1].split("Example:")[0]
+    return {m.group(1): m.group(2) for m in re.finditer(r"^  (\w+) .*\((.*)\)$", section, re.M)}
+
+
+def test_params_file_holds_every_parameter_at_its_default():
+    params = yaml.safe_load((REPO / "params/composuite.yaml").read_text())
+    for node in ("sim", "task_manager", "reward"):
+        declared = node_defaults(f"{node}_node")
+        in_file = dict(params["/**"]["ros__parameters"])
+        in_file.update(params.get(f"/**/{node}", {}).get("ros__parameters", {}))
+        assert set(in_file) == set(declared), node
+        for name, value in in_file.items():
+            shown = str(value).lower() if isinstance(value, bool) else str(value)
+            assert shown == declared[name], (node, name, value, declared[name])
+
+
+def test_ros2_launch_file_names_real_parameters_with_the_same_defaults():
+    source = (REPO / "launch_scripts/composuite.launch.py").read_text()
+    tree = ast.parse(source)
+    constants = {t.id: ast.literal_eval(node.value) for node in tree.body
+                 if isinstance(node, ast.Assign) for t in node.targets
+                 if isinstance(t, ast.Name) and t.id in ("ARGUMENTS", "NODE_PARAMETERS")}
+    defaults = {name: default for name, default, _ in constants["ARGUMENTS"]}
+    for node, parameters in constants["NODE_PARAMETERS"].items():
+        declared = node_defaults(f"{node}_node")
+        for p in parameters:
+            assert p in declared, (node, p)
+            assert defaults[p] == declared[p], (node, p, defaults[p], declared[p])
+
+
+@pytest.mark.parametrize("binary", ["sim_node", "task_manager_node", "reward_node"])
+def test_node_help_and_bad_arguments(binary):
+    help_text = subprocess.run([str(bin_dir() / binary), "--help"], capture_output=True, text=True)
+    assert help_text.returncode == 0 and "--ros-args" in help_text.stdout
+    bad = subprocess.run([str(bin_dir() / binary), "--ros-args", "-r", "__ns:=relative"],
+                         capture_output=True, text=True, timeout=20)
+    assert bad.returncode == 2 and "must be absolute" in bad.stderr
+
+
+def test_ros_domain_id_is_honoured_and_checked():
+    domain = random.randint(1, 100)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    node = subprocess.Popen([str(bin_dir() / "reward_node"), "--ros-args", "-r", "__ns:=/dom"],
+                            env=env, stderr=subprocess.PIPE, text=True)
+    try:
+        def publishes_reward(e):
+            return e.kind == "publication" and e.ros_name == "/dom/reward"
+        with ros_agent.Agent(domain_id=domain) as same:
+            same.wait_for_endpoint(publishes_reward, timeout=10)
+        with ros_agent.Agent(domain_id=domain + 100) as other:
+            time.sleep(1.5)
+            assert not any(publishes_reward(e) for e in other.discovered_topics())
+    finally:
+        node.send_signal(signal.SIGINT)
+        _, err = node.communicate(timeout=10)
+    assert node.returncode == 0, err
+    bad = subprocess.run([str(bin_dir() / "sim_node")], env=dict(os.environ, ROS_DOMAIN_ID="300"),
+                         capture_output=True, text=True, timeout=20)
+    assert bad.returncode == 2 and "ROS_DOMAIN_ID=300 is invalid; valid: 0..=232" in bad.stderr
+
+
+def test_remaps_and_node_name_apply_to_a_running_node():
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    node = subprocess.Popen([str(bin_dir() / "sim_node"), "--ros-args", "-r", "__ns:=/rm",
+                             "-r", "__node:=arm_sim", "-r", "joint_states:=arm_states",
+                             "-r", "joint_command:=/global_command"],
+                            env=env, stderr=subprocess.PIPE, text=True)
+    try:
+        with ros_agent.Agent(domain_id=domain) as agent:
+            agent.wait_for_endpoint(lambda e: e.kind == "publication" and e.ros_name == "/rm/arm_states",
+                                    timeout=10)
+            agent.wait_for_endpoint(lambda e: e.kind == "subscription" and e.ros_name == "/global_command",
+                                    timeout=10)
+            agent.wait_for_endpoint(lambda e: e.ros_name == "/rm/arm_sim/get_parameters", timeout=10)
+            names = {e.ros_name for e in agent.discovered_topics()}
+            assert "/rm/joint_states" not in names and "/rm/joint_command" not in names
+    finally:
+        node.send_signal(signal.SIGINT)
+        _, err = node.communicate(timeout=10)
+    assert node.returncode == 0, err
+    assert "[rm.arm_sim]" in err
+
+
+def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
+    """A writer whose type has the right name but the wrong layout: our sim cannot decode its
+    samples; it must say so and keep serving well-formed commands."""
+    from dataclasses import dataclass
+
+    from cyclonedds.idl import IdlStruct
+    from cyclonedds.idl import types as idl
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.topic import Topic
+
+    @dataclass
+    class Garbage(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
+        byte: idl.uint8
+
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r", "__ns:=/mal"],
+                              env=env, stderr=subprocess.PIPE, text=True)
+             for kind in ("task_manager", "sim")]
+    try:
+        with ros_agent.Agent(namespace="/mal", domain_id=domain) as agent:
+            states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
+            observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
+            command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
+            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="fastdds")
+            reply = reset.call({"seed": 1, "use_seed": True}, timeout=10)
+            assert reply.success, reply.message
+            first = states.wait_for(None, timeout=10)
+            bad = DataWriter(agent.participant, Topic(agent.participant, "rt/mal/joint_command", Garbage),
+                             qos=ros_agent.QOS_PROFILES["state"].to_dds())
+            time.sleep(0.5)
+            for _ in range(3):
+                bad.write(Garbage(byte=7))
+            command.wait_for_subscribers(1, timeout=10)
+            command.publish(name=list(first.name[:7]), position=list(first.position[:7]))
+            observations.wait_for({"episode": reply.episode, "step": 1}, timeout=10)
+    finally:
+        for p in procs:
+            p.send_signal(signal.SIGINT)
+        errs = [p.communicate(timeout=10)[1] for p in procs]
+    assert all(p.returncode == 0 for p in procs), errs
+    assert "unreadable joint_command dropped" in errs[1], errs[1]
