@@ -250,3 +250,23 @@ def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
         errs = [p.communicate(timeout=10)[1] for p in procs]
     assert all(p.returncode == 0 for p in procs), errs
     assert "unreadable joint_command dropped" in errs[1], errs[1]
+
+
+def test_reset_without_a_sim_fails_with_a_reason_instead_of_hanging():
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    node = subprocess.Popen([str(bin_dir() / "task_manager_node"), "--ros-args", "-r", "__ns:=/nosim",
+                             "-p", "reset_timeout:=0.5", "-p", "service_mapping:=cyclone"],
+                            env=env, stderr=subprocess.PIPE, text=True)
+    try:
+        with ros_agent.Agent(namespace="/nosim", domain_id=domain) as agent:
+            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="cyclone")
+            started = time.monotonic()
+            reply = reset.call({"seed": 3, "use_seed": True}, timeout=10, retries=0)
+            assert time.monotonic() - started < 3
+            assert not reply.success
+            assert "is sim_node running in this namespace?" in reply.message, reply.message
+    finally:
+        node.send_signal(signal.SIGINT)
+        _, err = node.communicate(timeout=10)
+    assert node.returncode == 0, err
