@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import signal
 import socket
 import struct
@@ -70,6 +71,17 @@ def float_bits(values) -> list[str]:
     """The IEEE-754 bits of each float as hex: equal lists mean bit-identical values (NaNs and
     signed zeros included), which `==` on floats does not tell."""
     return [struct.pack("<d", float(v)).hex() for v in values]
+
+
+def ns_of(stamp) -> int:
+    """A builtin_interfaces/Time as integer nanoseconds (exact, unlike float seconds)."""
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def random_domain() -> int:
+    """A ROS_DOMAIN_ID for one test module, so modules never see each other's nodes."""
+    require_isolation()
+    return random.SystemRandom().randint(1, 200)
 
 
 def require_isolation() -> None:

@@ -16,17 +16,14 @@ from pathlib import Path
 import pytest
 import yaml
 
+import node_suite
 import ros_agent
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def bin_dir() -> Path:
-    path = os.environ.get("COMPOSUITE_NODE_DIR")
-    if not path:
-        target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
-        path = str(target / "debug")
-    return Path(path)
+    return node_suite.node_dir()
 
 
 def composuite() -> str:

@@ -27,7 +27,7 @@ from cyclonedds.util import duration
 
 import node_suite
 import test_splits_reference as splits
-from node_suite import Suite, env_replay_expert, env_replay_run, float_bits
+from node_suite import Suite, ns_of, env_replay_expert, env_replay_run, float_bits
 from ros_agent import Agent
 
 pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnhandledThreadExceptionWarning")
@@ -60,17 +60,13 @@ SERVICES = {"set_task": "SetTask", "reset": "Reset", "sample_tasks": "SampleTask
 FINGERS = ["l_finger_joint", "r_finger_joint"]
 
 
-def ns_of(stamp) -> int:
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
-
 
 # ---- the suite and the agent -------------------------------------------------------------------
 
 
 @pytest.fixture(scope="module")
 def domain() -> int:
-    node_suite.require_isolation()
-    return random.SystemRandom().randint(1, 200)
+    return node_suite.random_domain()
 
 
 @pytest.fixture(scope="module")

@@ -32,7 +32,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 import node_suite
-from node_suite import Suite, env_replay_run, float_bits
+from node_suite import Suite, ns_of, env_replay_run, float_bits
 
 NS = "/rp"
 TASK = "Jaco/plate/goal_wall/trash_can"
@@ -57,14 +57,10 @@ SERVICES = {"set_task": "composuite_msgs/srv/SetTask", "reset": "composuite_msgs
             "sample_tasks": "composuite_msgs/srv/SampleTasks"}
 
 
-def ns_of(stamp) -> int:
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
-
 
 @pytest.fixture(scope="module")
 def domain() -> int:
-    node_suite.require_isolation()
-    return random.SystemRandom().randint(1, 200)
+    return node_suite.random_domain()
 
 
 @pytest.fixture(scope="module")

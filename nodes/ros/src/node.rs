@@ -11,6 +11,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use composuite_msgs::{RosMessage, RosService};
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::dds::rustdds::Topic;
 use ros2_client::dds::{
     Context, Node, NodeLoggingHandle, Publisher, Server, ServiceMapping, Subscription,
 };
@@ -402,17 +403,21 @@ impl RosNode {
         Name::parse(&absolute).map_err(|e| StartError(format!("topic name `{absolute}`: {e:?}")))
     }
 
+    /// Topic `name` of type `T` (remaps applied, relative to the namespace).
+    fn topic<T: RosMessage>(&self, name: &str, qos: &QosProfile) -> Result<Topic, StartError> {
+        let topic_name = self.resolve_name(name)?;
+        self.node
+            .create_topic(&topic_name, message_type_name::<T>(), qos)
+            .map_err(|e| StartError(format!("topic {name}: {e:?}")))
+    }
+
     /// A publisher of `T` on topic `name` (remaps applied, relative to the namespace).
     pub fn publisher<T: RosMessage + Message>(
         &mut self,
         name: &str,
         qos: QosProfile,
     ) -> Result<Publisher<T>, StartError> {
-        let topic_name = self.resolve_name(name)?;
-        let topic = self
-            .node
-            .create_topic(&topic_name, message_type_name::<T>(), &qos)
-            .map_err(|e| StartError(format!("topic {name}: {e:?}")))?;
+        let topic = self.topic::<T>(name, &qos)?;
         self.node
             .create_publisher(&topic, Some(qos))
             .map_err(|e| StartError(format!("publisher {name}: {e:?}")))
@@ -424,11 +429,7 @@ impl RosNode {
         name: &str,
         qos: QosProfile,
     ) -> Result<Subscription<T>, StartError> {
-        let topic_name = self.resolve_name(name)?;
-        let topic = self
-            .node
-            .create_topic(&topic_name, message_type_name::<T>(), &qos)
-            .map_err(|e| StartError(format!("topic {name}: {e:?}")))?;
+        let topic = self.topic::<T>(name, &qos)?;
         self.node
             .create_subscription(&topic, Some(qos))
             .map_err(|e| StartError(format!("subscription {name}: {e:?}")))

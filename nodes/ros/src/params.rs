@@ -28,6 +28,14 @@ pub fn any_value(_: &ParameterValue) -> Result<(), String> {
     Ok(())
 }
 
+/// Accept a finite double > 0 (periods, factors, timeouts).
+pub fn positive_number(v: &ParameterValue) -> Result<(), String> {
+    match v {
+        ParameterValue::Double(d) if d.is_finite() && *d > 0.0 => Ok(()),
+        _ => Err("must be a finite number > 0".into()),
+    }
+}
+
 /// The ROS type name of a value, for messages.
 pub fn type_name(v: &ParameterValue) -> &'static str {
     match v {

@@ -32,20 +32,13 @@ use ros2_client::dds::Publisher;
 use crate::convert;
 use crate::names;
 use crate::node::{ParamChange, RosNode};
-use crate::params::{ParamSpec, any_value};
+use crate::params::{ParamSpec, any_value, positive_number};
 use crate::qos;
 
 fn check_mode(v: &ParameterValue) -> Result<(), String> {
     match v {
         ParameterValue::String(s) if Mode::parse(s).is_some() => Ok(()),
         _ => Err("valid: lockstep, realtime".into()),
-    }
-}
-
-fn check_positive(v: &ParameterValue) -> Result<(), String> {
-    match v {
-        ParameterValue::Double(d) if d.is_finite() && *d > 0.0 => Ok(()),
-        _ => Err("must be a finite number > 0".into()),
     }
 }
 
@@ -61,7 +54,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "realtime_factor",
         default: || ParameterValue::Double(1.0),
         description: "realtime mode: sim seconds per wall second",
-        check: check_positive,
+        check: positive_number,
     },
     ParamSpec {
         name: "task_observation",

@@ -22,7 +22,7 @@ use ros2_client::dds::{Publisher, Server};
 use crate::convert;
 use crate::names;
 use crate::node::{Logger, ParamChange, RosNode};
-use crate::params::{ParamSpec, any_value};
+use crate::params::{ParamSpec, any_value, positive_number};
 use crate::qos;
 
 /// The task a suite starts with when nothing else is asked.
@@ -46,13 +46,6 @@ fn check_horizon(v: &ParameterValue) -> Result<(), String> {
     match v {
         ParameterValue::Integer(h) if (1..=u32::MAX as i64).contains(h) => Ok(()),
         _ => Err("the horizon is a number of control steps >= 1".into()),
-    }
-}
-
-fn check_timeout(v: &ParameterValue) -> Result<(), String> {
-    match v {
-        ParameterValue::Double(d) if d.is_finite() && *d > 0.0 => Ok(()),
-        _ => Err("seconds, > 0".into()),
     }
 }
 
@@ -86,7 +79,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "reset_timeout",
         default: || ParameterValue::Double(5.0),
         description: "seconds reset waits for the sim's first observation",
-        check: check_timeout,
+        check: positive_number,
     },
 ];
 
