@@ -1,0 +1,138 @@
+"""A minimal rclpy agent for CompoSuite-ROS in lockstep mode: what an RL environment wrapper
+does, in one readable file. ROS 2 Jazzy's rclpy, composuite_msgs built in your workspace.
+
+    composuite launch --task IIWA/box/no_obstacle/pick_place &      # the suite (lockstep)
+    python examples/lockstep_agent.py --episodes 2 --steps 100      # random joint targets
+
+The protocol (README, "Lockstep"): reset through the `reset` service (the reply carries the
+step-0 observation); then per step publish `joint_command` (all seven arm joints, absolute
+targets) and wait for the `observation`, `reward` and `episode` messages of that step, matched by
+(episode, step) — never "the latest message". Every wait has a wall-clock deadline.
+
+rclpy 7.1.6 notes: a private Context, an own SingleThreadedExecutor polled with spin_once (no
+spin_until_future_complete on service futures: it slows down with every call in that release).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import random
+import time
+
+import rclpy
+from composuite_msgs.msg import EpisodeStatus, Observation, StagedReward
+from composuite_msgs.srv import Reset
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+
+ARM_JOINTS = 7
+
+
+class LockstepEnv:
+    """reset(seed) -> observation; step(targets) -> (observation, reward, terminated, truncated,
+    info) — the Gymnasium shapes, over ROS 2."""
+
+    def __init__(self, namespace: str = "/", domain_id: int | None = None, timeout: float = 10.0):
+        self.timeout = timeout
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = Node("lockstep_agent", namespace=namespace, context=self.context,
+                         start_parameter_services=False)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        # Everything received, keyed by (episode, step); cleared at each reset.
+        self.observations: dict[tuple[int, int], Observation] = {}
+        self.rewards: dict[tuple[int, int], StagedReward] = {}
+        self.statuses: dict[tuple[int, int], EpisodeStatus] = {}
+        self.joint_names: list[str] = []
+        self.node.create_subscription(Observation, "observation",
+                                      lambda m: self.observations.__setitem__((m.episode, m.step), m), qos)
+        self.node.create_subscription(StagedReward, "reward",
+                                      lambda m: self.rewards.__setitem__((m.episode, m.step), m), qos)
+        self.node.create_subscription(EpisodeStatus, "episode",
+                                      lambda m: self.statuses.__setitem__((m.episode, m.step), m), qos)
+        self.node.create_subscription(JointState, "joint_states", self._on_joint_states, qos)
+        self.command = self.node.create_publisher(JointState, "joint_command", qos)
+        self.reset_client = self.node.create_client(Reset, "reset")
+        self.episode = 0
+        self.step_count = 0
+
+    def _on_joint_states(self, message: JointState) -> None:
+        if not self.joint_names:
+            self.joint_names = list(message.name[:ARM_JOINTS])
+
+    def _spin_until(self, done, what: str) -> None:
+        deadline = time.monotonic() + self.timeout
+        while not done():
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"no {what} within {self.timeout} s; is the suite running (lockstep)?")
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def reset(self, seed: int | None = None) -> Observation:
+        self._spin_until(self.reset_client.service_is_ready, "reset service")
+        request = Reset.Request(seed=seed or 0, use_seed=seed is not None)
+        future = self.reset_client.call_async(request)
+        self._spin_until(future.done, "reset reply")
+        reply = future.result()
+        if not reply.success:
+            raise RuntimeError(f"reset refused: {reply.message}")
+        self.observations.clear()
+        self.rewards.clear()
+        self.statuses.clear()
+        self.episode, self.step_count = reply.episode, 0
+        # The joint names come with the first joint_states (published at every reset and step).
+        self._spin_until(lambda: bool(self.joint_names), "joint_states")
+        return reply.observation
+
+    def step(self, targets: list[float]):
+        key = (self.episode, self.step_count + 1)
+        self.command.publish(JointState(name=self.joint_names, position=[float(t) for t in targets]))
+        self._spin_until(lambda: key in self.observations and key in self.rewards and key in self.statuses,
+                         f"observation/reward/episode for step {key[1]}")
+        self.step_count += 1
+        observation, reward, status = self.observations[key], self.rewards[key], self.statuses[key]
+        info = {"success": reward.success, "stages": dict(zip(reward.stage_names, reward.stage_values)),
+                "reason": status.reason_text}
+        return observation, reward.total, status.terminated, status.truncated, info
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--namespace", default="/")
+    parser.add_argument("--episodes", type=int, default=1)
+    parser.add_argument("--steps", type=int, default=100, help="steps per episode at most")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    env = LockstepEnv(args.namespace)
+    rng = random.Random(args.seed)
+    try:
+        for episode in range(args.episodes):
+            observation = env.reset(seed=args.seed + episode)
+            # Joint angles from the observation's cos/sin (the factored robot state).
+            home = [math.atan2(s, c) for s, c in zip(observation.robot.joint_pos_sin, observation.robot.joint_pos_cos)]
+            total, started = 0.0, time.perf_counter()
+            for _ in range(args.steps):
+                targets = [q + rng.uniform(-0.1, 0.1) for q in home]
+                observation, reward, terminated, truncated, info = env.step(targets)
+                total += reward
+                if terminated or truncated:
+                    break
+            elapsed = time.perf_counter() - started
+            print(f"episode {env.episode}: {env.step_count} steps, return {total:.3f}, "
+                  f"{env.step_count / elapsed:.0f} steps/s")
+    finally:
+        env.close()
+
+
+if __name__ == "__main__":
+    main()
