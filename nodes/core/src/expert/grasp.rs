@@ -90,7 +90,16 @@ pub(super) struct GraspInput<'a> {
 /// The grasps of the object in `input`, the planner's preferred one first.
 pub(super) fn grasp_candidates(input: &GraspInput) -> Vec<Grasp> {
     match input.object {
-        Object::Box | Object::HollowBox => vec![top_grasp(input)],
+        Object::Box => vec![top_grasp(input)],
+        Object::HollowBox => {
+            // By the wall on the robot's side, else by the opposite one.
+            let near = top_grasp(input);
+            let far = Grasp {
+                pad: near.pad + 2.0 * (input.position.coords - near.pad).xy().push(0.0),
+                ..near
+            };
+            vec![near, far]
+        }
         Object::Dumbbell => side_grasps(|h| dumbbell_grasps_towards(input.position, h)),
         Object::Plate => side_grasps(|h| plate_grasps_towards(input.position, h)),
     }
