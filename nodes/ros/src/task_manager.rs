@@ -90,6 +90,8 @@ struct Episode {
     number: u32,
     horizon: u32,
     last_step: u32,
+    /// Header (sim-time stamp) of the last world state counted.
+    last_header: composuite_msgs::std_msgs::msg::Header,
     episode_return: f64,
     success_seen: bool,
     done: bool,
@@ -276,6 +278,7 @@ impl TaskManager {
             number,
             horizon: self.horizon,
             last_step: 0,
+            last_header: convert::header(convert::time_from_nanos(0)),
             episode_return: 0.0,
             success_seen: false,
             done: false,
@@ -290,7 +293,7 @@ impl TaskManager {
             && ep.last_step > 0
         {
             ep.done = true;
-            let status = status_message(ep, reason, text, false, false, None);
+            let status = status_message(ep, reason, text, false, false);
             let _ = self.status.publish(status);
         }
     }
@@ -309,6 +312,7 @@ impl TaskManager {
         let snapshot = convert::snapshot(w);
         let reward = staged_reward(ep.task.objective, ep.task.object, &snapshot);
         ep.last_step = w.step;
+        ep.last_header = w.header.clone();
         ep.episode_return += reward.total;
         ep.success_seen |= reward.success;
         let ended = termination(ep.task.objective, &snapshot);
@@ -325,14 +329,7 @@ impl TaskManager {
             (None, false) => (msg::EpisodeStatus::REASON_RUNNING, String::new()),
         };
         ep.done = ended.is_some() || truncated;
-        let status = status_message(
-            ep,
-            reason,
-            &text,
-            ended.is_some(),
-            truncated,
-            Some(&w.header),
-        );
+        let status = status_message(ep, reason, &text, ended.is_some(), truncated);
         let _ = self.status.publish(status);
         if ep.done {
             log.info(format!(
@@ -495,12 +492,10 @@ fn status_message(
     text: &str,
     terminated: bool,
     truncated: bool,
-    header: Option<&composuite_msgs::std_msgs::msg::Header>,
 ) -> msg::EpisodeStatus {
     msg::EpisodeStatus {
-        header: header
-            .cloned()
-            .unwrap_or_else(|| convert::header(convert::time_from_nanos(0))),
+        // Stamped like the last step counted (a reset ending an episode has no step of its own).
+        header: ep.last_header.clone(),
         task: convert::task_spec(&ep.task),
         seed: ep.seed,
         episode: ep.number,
