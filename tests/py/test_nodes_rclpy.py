@@ -338,3 +338,26 @@ def test_parameters_through_the_parameter_services(agent, suite, discovered):
     finally:
         for client in (get, listing, set_):
             node.destroy_client(client)
+
+
+def test_logs_reach_rosout_with_level_and_logger_name(agent, suite, discovered):
+    """What `ros2 run rqt_console` / `ros2 topic echo /rosout` show: a refused command's WARN."""
+    from rcl_interfaces.msg import Log
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    logs: list = []
+    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.VOLATILE)
+    agent.node.create_subscription(Log, "/rosout", logs.append, qos)
+    command = agent.node.create_publisher(JointState, f"{NS}/joint_command", 10)
+    agent.spin_until(lambda: command.get_subscription_count() > 0, what="the sim's joint_command reader")
+    # rosout is reliable: keep offering the bad command until the subscription has matched too.
+    def warned():
+        command.publish(JointState(name=["no_such_joint"], position=[0.0]))
+        agent.executor.spin_once(timeout_sec=0.1)
+        return [m for m in logs if "joint_command refused" in m.msg]
+    found = agent.spin_until(warned, what="the WARN on /rosout")
+    record = found[0]
+    assert record.level == Log.WARN
+    assert record.name == f"{NS.strip('/')}.sim"
+    assert "unknown joint `no_such_joint`" in record.msg and "valid:" in record.msg
