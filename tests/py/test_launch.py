@@ -267,3 +267,15 @@ def test_reset_without_a_sim_fails_with_a_reason_instead_of_hanging():
         node.send_signal(signal.SIGINT)
         _, err = node.communicate(timeout=10)
     assert node.returncode == 0, err
+
+
+def test_demo_plays_the_expert_over_ros_identically_to_in_process():
+    result = subprocess.run([composuite(), "demo", "--episodes", "1", "--seed", "0", "--json"],
+                            env=dict(os.environ, ROS_DOMAIN_ID=str(random.randint(1, 200))),
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    import json
+    episodes = [json.loads(line) for line in result.stdout.splitlines() if line.startswith("{")]
+    assert len(episodes) == 1
+    assert episodes[0]["identical_to_in_process"] is True
+    assert episodes[0]["success"] is True and episodes[0]["steps"] == 500

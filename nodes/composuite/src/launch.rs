@@ -182,34 +182,87 @@ fn signal(child: &Child, signal: i32) {
     }
 }
 
-/// Run the suite until a signal, `--duration`, or a node's death.
-pub fn run(args: &LaunchArgs) -> Result<(), String> {
-    validate(args)?;
-    let exe = std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
-    let signals = composuite_ros::node::shutdown_signal()
-        .map_err(|e| format!("cannot watch for signals: {e}"))?;
-    let mut nodes: Vec<Running> = Vec::new();
-    for index in 0..args.envs {
-        let namespace = env_namespace(&args.namespace, index, args.envs);
-        for kind in NodeKind::ALL {
-            let child = Command::new(&exe)
-                .arg("node")
-                .arg(kind.name())
-                .args(node_arguments(args, kind, &namespace, index))
-                .spawn();
-            match child {
-                Ok(child) => nodes.push(Running {
-                    kind,
-                    namespace: namespace.clone(),
-                    child,
-                }),
-                Err(e) => {
-                    stop_all(&mut nodes);
-                    return Err(format!("cannot start {kind} in {namespace}: {e}"));
+/// The nodes of a running suite (every environment's three).
+pub(crate) struct Suite {
+    nodes: Vec<Running>,
+}
+
+impl Suite {
+    /// Validate `args` and start every node as a child process of this executable.
+    pub(crate) fn start(args: &LaunchArgs) -> Result<Suite, String> {
+        validate(args)?;
+        let exe =
+            std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
+        let mut suite = Suite { nodes: Vec::new() };
+        for index in 0..args.envs {
+            let namespace = env_namespace(&args.namespace, index, args.envs);
+            for kind in NodeKind::ALL {
+                let child = Command::new(&exe)
+                    .arg("node")
+                    .arg(kind.name())
+                    .args(node_arguments(args, kind, &namespace, index))
+                    .spawn();
+                match child {
+                    Ok(child) => suite.nodes.push(Running {
+                        kind,
+                        namespace: namespace.clone(),
+                        child,
+                    }),
+                    Err(e) => {
+                        suite.stop();
+                        return Err(format!("cannot start {kind} in {namespace}: {e}"));
+                    }
                 }
             }
         }
+        Ok(suite)
     }
+
+    /// The first node that exited on its own, described.
+    pub(crate) fn died(&mut self) -> Option<String> {
+        self.nodes
+            .iter_mut()
+            .find_map(|n| match n.child.try_wait() {
+                Ok(Some(status)) => Some(format!(
+                    "{} in {} exited on its own ({})",
+                    n.kind,
+                    n.namespace,
+                    describe(status)
+                )),
+                _ => None,
+            })
+    }
+
+    /// Stop every node; true when all exited cleanly.
+    pub(crate) fn stop(mut self) -> bool {
+        stop_all(&mut self.nodes)
+    }
+}
+
+impl LaunchArgs {
+    /// One lockstep environment of `task` in `namespace`, everything else at its default.
+    pub(crate) fn one_environment(task: &str, namespace: &str, log_level: &str) -> LaunchArgs {
+        LaunchArgs {
+            task: Some(task.into()),
+            mode: Some("lockstep".into()),
+            namespace: namespace.into(),
+            envs: 1,
+            seed: None,
+            horizon: None,
+            service_mapping: None,
+            auto_reset: false,
+            params_file: None,
+            log_level: log_level.into(),
+            duration: None,
+        }
+    }
+}
+
+/// Run the suite until a signal, `--duration`, or a node's death.
+pub fn run(args: &LaunchArgs) -> Result<(), String> {
+    let signals = composuite_ros::node::shutdown_signal()
+        .map_err(|e| format!("cannot watch for signals: {e}"))?;
+    let mut suite = Suite::start(args)?;
     eprintln!(
         "composuite launch: {} environment(s) × 3 nodes started; Ctrl-C stops them",
         args.envs
@@ -226,21 +279,12 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
             eprintln!("composuite launch: --duration reached, stopping the nodes");
             break Ok(());
         }
-        let died = nodes.iter_mut().find_map(|n| match n.child.try_wait() {
-            Ok(Some(status)) => Some(format!(
-                "{} in {} exited on its own ({})",
-                n.kind,
-                n.namespace,
-                describe(status)
-            )),
-            _ => None,
-        });
-        if let Some(what) = died {
+        if let Some(what) = suite.died() {
             break Err(format!("{what}; stopped the others"));
         }
         std::thread::sleep(Duration::from_millis(50));
     };
-    let clean = stop_all(&mut nodes);
+    let clean = suite.stop();
     match outcome {
         Err(e) => Err(e),
         Ok(()) if clean => Ok(()),

@@ -3,6 +3,7 @@
 //! expert, and launches the ROS 2 node suite.
 
 mod bench;
+mod demo;
 mod expert;
 mod launch;
 mod tasks;
@@ -24,6 +25,7 @@ enum Command {
     Bench(bench::BenchArgs),
     Expert(expert::ExpertArgs),
     Launch(launch::LaunchArgs),
+    Demo(demo::DemoArgs),
     /// Run one node of the suite (what `launch` starts): `composuite node sim --ros-args ...`.
     #[command(hide = true, disable_help_flag = true)]
     Node {
@@ -50,6 +52,7 @@ fn main() -> std::process::ExitCode {
             };
         }
         Command::Launch(args) => launch::run(&args),
+        Command::Demo(args) => demo::run(&args),
         Command::Tasks(args) => tasks::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Expert(args) => expert::run(&args),

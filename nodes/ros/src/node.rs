@@ -459,6 +459,29 @@ impl RosNode {
             .map_err(|e| StartError(format!("service {name}: {e:?}")))
     }
 
+    /// A client of service `S` named `name`, in this node's service wire format.
+    pub fn client<S: RosService>(
+        &mut self,
+        name: &str,
+    ) -> Result<ros2_client::dds::Client<S::Request, S::Response>, StartError>
+    where
+        S::Request: Message,
+        S::Response: Message,
+    {
+        let service_name = self.resolve_name(name)?;
+        let (package, _, type_name) = split_ros_name(S::ROS_NAME);
+        let qos = crate::qos::services();
+        self.node
+            .create_client(
+                self.service_mapping,
+                &service_name,
+                &ServiceTypeName::new(package, type_name),
+                qos.clone(),
+                qos,
+            )
+            .map_err(|e| StartError(format!("service client {name}: {e:?}")))
+    }
+
     /// Stop the parameter services and wait for their thread.
     pub fn shutdown(mut self) {
         drop(self.parameter_services.take());

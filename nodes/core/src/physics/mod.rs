@@ -17,5 +17,5 @@ pub use robot_model::{
 pub use tags::{ColliderTag, Side};
 pub use world::{
     ARM_DOF, ArmHandles, FINGER_OPEN, FingerContacts, GripperCommand, ServoMode, SimWorld,
-    from_pose, pad_gap, to_pose,
+    finger_for_gap, from_pose, pad_gap, to_pose,
 };

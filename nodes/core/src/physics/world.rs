@@ -37,8 +37,16 @@ pub enum GripperCommand {
 /// The pad gap at finger position `q_left` (fingers coupled, q_right = −q_left):
 /// 0.0371 m at q = 0 (arm-facts, rethink_gripper.geometry_summary).
 pub fn pad_gap(q_left: f64) -> f64 {
-    0.0371 + 2.0 * q_left
+    PAD_GAP_AT_ZERO + 2.0 * q_left
 }
+
+/// The left finger position whose pad gap is `gap` (the inverse of [`pad_gap`]).
+pub fn finger_for_gap(gap: f64) -> f64 {
+    (gap - PAD_GAP_AT_ZERO) / 2.0
+}
+
+/// Pad gap (m) with both fingers at 0.
+const PAD_GAP_AT_ZERO: f64 = 0.0371;
 
 /// How the arm's joint servos behave.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
