@@ -9,6 +9,7 @@ Only use it inside scripts/netns-isolate (or netns-run): the nodes speak DDS."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import random
@@ -184,3 +185,16 @@ class Suite:
             if process.poll() is None:
                 process.kill()
                 process.wait()
+
+
+@contextlib.contextmanager
+def running(log_dir: Path, namespace: str, domain_id: int, **params):
+    """A Suite that is up for the `with` body, then stopped; its nodes must exit cleanly."""
+    suite = Suite(log_dir, namespace, domain_id, **params)
+    try:
+        suite.wait_until_up()
+    except BaseException:
+        suite.kill()
+        raise
+    yield suite
+    suite.stop_and_check()

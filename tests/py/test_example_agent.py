@@ -11,7 +11,7 @@ import sys
 import pytest
 
 import node_suite
-from node_suite import Suite, env_replay_run, float_bits
+from node_suite import env_replay_run, float_bits
 
 EXAMPLE = node_suite.REPO / "examples" / "lockstep_agent.py"
 NS = "/ex"
@@ -25,14 +25,9 @@ def domain() -> int:
 
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory, domain):
-    s = Suite(tmp_path_factory.mktemp("example_logs"), NS, domain, task_manager={"task": TASK})
-    try:
-        s.wait_until_up()
-    except BaseException:
-        s.kill()
-        raise
-    yield s
-    s.stop_and_check()
+    with node_suite.running(tmp_path_factory.mktemp("example_logs"), NS, domain,
+                            task_manager={"task": TASK}) as s:
+        yield s
 
 
 def load_example():

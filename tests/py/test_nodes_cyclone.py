@@ -72,29 +72,17 @@ def domain() -> int:
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory, domain):
     """The main environment, /cy: lockstep, services in the Cyclone format."""
-    s = Suite(tmp_path_factory.mktemp("cyclone_logs"), "/cy", domain,
-              task_manager={"service_mapping": "cyclone"})
-    try:
-        s.wait_until_up()
-    except BaseException:
-        s.kill()
-        raise
-    yield s
-    s.stop_and_check()
+    with node_suite.running(tmp_path_factory.mktemp("cyclone_logs"), "/cy", domain,
+                            task_manager={"service_mapping": "cyclone"}) as s:
+        yield s
 
 
 @pytest.fixture(scope="module")
 def short_suite(tmp_path_factory, domain):
     """A second environment, /cy_h5, whose episodes last 5 steps (for "step after done")."""
-    s = Suite(tmp_path_factory.mktemp("cyclone_h5_logs"), "/cy_h5", domain,
-              task_manager={"service_mapping": "cyclone", "horizon": 5})
-    try:
-        s.wait_until_up()
-    except BaseException:
-        s.kill()
-        raise
-    yield s
-    s.stop_and_check()
+    with node_suite.running(tmp_path_factory.mktemp("cyclone_h5_logs"), "/cy_h5", domain,
+                            task_manager={"service_mapping": "cyclone", "horizon": 5}) as s:
+        yield s
 
 
 @pytest.fixture(autouse=True)

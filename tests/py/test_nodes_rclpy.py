@@ -32,7 +32,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 import node_suite
-from node_suite import Suite, ns_of, env_replay_run, float_bits
+from node_suite import ns_of, env_replay_run, float_bits
 
 NS = "/rp"
 TASK = "Jaco/plate/goal_wall/trash_can"
@@ -65,14 +65,8 @@ def domain() -> int:
 
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory, domain):
-    s = Suite(tmp_path_factory.mktemp("rclpy_logs"), NS, domain)  # services: fastdds (default)
-    try:
-        s.wait_until_up()
-    except BaseException:
-        s.kill()
-        raise
-    yield s
-    s.stop_and_check()
+    with node_suite.running(tmp_path_factory.mktemp("rclpy_logs"), NS, domain) as s:  # services: fastdds (default)
+        yield s
 
 
 @pytest.fixture(autouse=True)
