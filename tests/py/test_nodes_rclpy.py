@@ -355,3 +355,37 @@ def test_logs_reach_rosout_with_level_and_logger_name(agent, suite, discovered):
     assert record.level == Log.WARN
     assert record.name == f"{NS.strip('/')}.sim"
     assert "unknown joint `no_such_joint`" in record.msg and "valid:" in record.msg
+
+
+def test_setting_mode_to_realtime_starts_the_wall_clock_stepping(agent, suite, discovered):
+    """A parameter set through the services changes what the node does, not only its value:
+    in lockstep nothing moves without a command; after `mode:=realtime` the sim steps by itself
+    (at 20 Hz × realtime_factor, which the parameters test left at 2.0)."""
+    node = agent.node
+    states: list = []
+    node.create_subscription(JointState, f"{NS}/joint_states", states.append, 10)
+    set_ = node.create_client(SetParameters, f"{NS}/sim/set_parameters")
+    reset = node.create_client(Reset, f"{NS}/reset")
+    try:
+        assert agent.call(reset, Reset.Request(seed=2, use_seed=True)).success
+        agent.spin_until(lambda: states, what="the reset's joint_states")
+        time.sleep(0.5)
+        agent.executor.spin_once(timeout_sec=0.05)
+        quiet = len(states)
+        time.sleep(0.5)
+        for _ in range(10):
+            agent.executor.spin_once(timeout_sec=0.01)
+        assert len(states) == quiet, "lockstep sim stepped without a command"
+        value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="realtime")
+        result = agent.call(set_, SetParameters.Request(parameters=[Parameter(name="mode", value=value)]))
+        assert result.results[0].successful, result.results[0].reason
+        started, before = time.monotonic(), len(states)
+        agent.spin_until(lambda: len(states) >= before + 20, timeout=5.0, what="realtime joint_states")
+        rate = (len(states) - before) / (time.monotonic() - started)
+        assert 20 <= rate <= 60, f"{rate:.1f} Hz at realtime_factor 2"
+        value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="lockstep")
+        result = agent.call(set_, SetParameters.Request(parameters=[Parameter(name="mode", value=value)]))
+        assert result.results[0].successful
+    finally:
+        node.destroy_client(set_)
+        node.destroy_client(reset)
