@@ -29,6 +29,21 @@ impl TaskSpec {
         }
     }
 
+    /// The task named on each axis (any spelling of each element, as the services receive them).
+    pub fn from_names(
+        robot: &str,
+        object: &str,
+        obstacle: &str,
+        objective: &str,
+    ) -> Result<TaskSpec, TaskParseError> {
+        Ok(TaskSpec {
+            robot: Robot::parse(robot).map_err(TaskParseError::Element)?,
+            object: Object::parse(object).map_err(TaskParseError::Element)?,
+            obstacle: Obstacle::parse(obstacle).map_err(TaskParseError::Element)?,
+            objective: Objective::parse(objective).map_err(TaskParseError::Element)?,
+        })
+    }
+
     /// Index in the suite's canonical order: 64·robot + 16·object + 4·obstacle + objective, each
     /// element's index in the suite's axis order (0..256).
     pub fn task_index(&self) -> usize {
@@ -105,12 +120,7 @@ impl FromStr for TaskSpec {
         let [robot, object, obstacle, objective] = parts.as_slice() else {
             return Err(TaskParseError::Shape(s.to_string()));
         };
-        Ok(TaskSpec {
-            robot: Robot::parse(robot).map_err(TaskParseError::Element)?,
-            object: Object::parse(object).map_err(TaskParseError::Element)?,
-            obstacle: Obstacle::parse(obstacle).map_err(TaskParseError::Element)?,
-            objective: Objective::parse(objective).map_err(TaskParseError::Element)?,
-        })
+        TaskSpec::from_names(robot, object, obstacle, objective)
     }
 }
 

@@ -390,3 +390,8 @@ pub fn world_transform(
         },
     }
 }
+
+/// The task a `TaskSpec` message names (by its wire names; any spelling is accepted).
+pub fn task_of(spec: &msg::TaskSpec) -> Result<TaskSpec, composuite_core::TaskParseError> {
+    TaskSpec::from_names(&spec.robot, &spec.object, &spec.obstacle, &spec.objective)
+}

@@ -60,9 +60,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                 }
                 scene = scenes.select_next_some() => match scene {
                     Ok((scene, _)) => {
-                        let t = &scene.task;
-                        let text = format!("{}/{}/{}/{}", t.robot, t.object, t.obstacle, t.objective);
-                        match text.parse::<TaskSpec>() {
+                        match convert::task_of(&scene.task) {
                             Ok(task) => {
                                 current = Some((task, scene.episode));
                                 for w in early.drain(..).filter(|w| w.episode == scene.episode) {

@@ -244,12 +244,7 @@ impl Sim {
     }
 
     fn on_scene(&mut self, scene: &msg::Scene, log: &crate::node::Logger) {
-        let names = &scene.task;
-        let text = format!(
-            "{}/{}/{}/{}",
-            names.robot, names.object, names.obstacle, names.objective
-        );
-        let task: TaskSpec = match text.parse() {
+        let task: TaskSpec = match convert::task_of(&scene.task) {
             Ok(task) => task,
             Err(err) => {
                 log.error(format!("scene refused: {err}"));

@@ -349,11 +349,7 @@ impl TaskManager {
     }
 
     fn on_set_task(&mut self, req: &srv::SetTaskRequest, log: &Logger) -> srv::SetTaskResponse {
-        let text = format!(
-            "{}/{}/{}/{}",
-            req.robot, req.object, req.obstacle, req.objective
-        );
-        match text.parse::<TaskSpec>() {
+        match TaskSpec::from_names(&req.robot, &req.object, &req.obstacle, &req.objective) {
             Ok(task) => {
                 self.task = task;
                 match self.start_episode(None) {
