@@ -279,3 +279,29 @@ def test_demo_plays_the_expert_over_ros_identically_to_in_process():
     assert len(episodes) == 1
     assert episodes[0]["identical_to_in_process"] is True
     assert episodes[0]["success"] is True and episodes[0]["steps"] == 500
+
+
+def test_robot_description_and_tf_static_place_the_arm_for_rviz():
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r", "__ns:=/viz",
+                               *(["-p", "task:=Panda/box/no_obstacle/push"] if kind == "task_manager" else [])],
+                              env=env, stderr=subprocess.PIPE, text=True)
+             for kind in ("task_manager", "sim")]
+    try:
+        with ros_agent.Agent(namespace="/viz", domain_id=domain) as agent:
+            # Late joiners: both are latched (transient local).
+            statics = agent.subscribe("tf_static", "tf2_msgs/msg/TFMessage", qos="latched")
+            urdf = agent.subscribe("robot_description", "std_msgs/msg/String", qos="latched")
+            transform = statics.wait_for(None, timeout=20).transforms[0]
+            description = urdf.wait_for(None, timeout=20).data
+    finally:
+        for p in procs:
+            p.send_signal(signal.SIGINT)
+        errs = [p.communicate(timeout=10)[1] for p in procs]
+    assert all(p.returncode == 0 for p in procs), errs
+    # Panda's URDF root link, at CompoSuite's robot base position (facts: -0.5, -0.1, 0.912).
+    assert transform.header.frame_id == "world" and transform.child_frame_id == "link0"
+    t = transform.transform.translation
+    assert (t.x, t.y, t.z) == (-0.5, -0.1, 0.912)
+    assert '<link name="link0"' in description and "gripper_mount" in description

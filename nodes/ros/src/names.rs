@@ -33,6 +33,9 @@ pub const WORLD_FRAME: &str = "world";
 pub const ROBOT_DESCRIPTION: &str = "robot_description";
 /// Transforms of the gripper, object and goal frames in the world (tf2_msgs/TFMessage).
 pub const TF: &str = "tf";
+/// The arm's base in the world (tf2_msgs/TFMessage), transient local like tf2's `/tf_static`:
+/// with `robot_description` and `joint_states` (robot_state_publisher) it places the arm.
+pub const TF_STATIC: &str = "tf_static";
 /// `tf` frame of the grip site (position) with the hand's orientation: the reference's eef.
 pub const EEF_FRAME: &str = "eef";
 /// `tf` frame of the object's body origin.

@@ -8,7 +8,8 @@
 //! - `lockstep` mode: each `joint_command` advances exactly one control period, and nothing
 //!   else does; `realtime` mode: a wall-clock timer steps with the last targets held;
 //! - after every step (and at reset): `world_state` first (the reward node's input), then
-//!   `observation`, `joint_states`, `tf`, `clock`, all stamped with the new sim time.
+//!   `observation`, `joint_states`, `tf`, `clock`, all stamped with the new sim time; when the
+//!   robot changes, the latched `robot_description` and `tf_static` (world → the arm's root link).
 //!
 //! Sim time never goes backwards: it advances one control period per step, and one per reset,
 //! so every stamp is unique within a run.
@@ -90,6 +91,7 @@ struct Publishers {
     world_state: Publisher<msg::WorldState>,
     clock: Publisher<Clock>,
     tf: Publisher<TFMessage>,
+    tf_static: Publisher<TFMessage>,
     robot_description: Publisher<StringMsg>,
 }
 
@@ -145,6 +147,9 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
             .map_err(e)?,
         clock: node.publisher(names::CLOCK, qos::clock()).map_err(e)?,
         tf: node.publisher(names::TF, qos::state()).map_err(e)?,
+        tf_static: node
+            .publisher(names::TF_STATIC, qos::latched())
+            .map_err(e)?,
         robot_description: node
             .publisher(names::ROBOT_DESCRIPTION, qos::latched())
             .map_err(e)?,
@@ -290,6 +295,16 @@ impl Sim {
         if robot_changed {
             let _ = self.pubs.robot_description.publish(StringMsg {
                 data: robot_description(task.robot),
+            });
+            // The URDF's root link sits at the robot base pose in the world.
+            let root = &robot_model(task.robot).bodies[0].name;
+            let base = convert::pose(&composuite_core::arena::robot_base_pose());
+            let _ = self.pubs.tf_static.publish(TFMessage {
+                transforms: vec![convert::world_transform(
+                    root,
+                    &base,
+                    convert::time_from_nanos(self.sim_time_ns),
+                )],
             });
         }
         log.info(format!(
