@@ -55,6 +55,7 @@ TOPICS = {
     "clock": ("rosgraph_msgs/msg/Clock", "publication", CLOCK),
     "tf": ("tf2_msgs/msg/TFMessage", "publication", STATE),
     "robot_description": ("std_msgs/msg/String", "publication", LATCHED),
+    "tf_static": ("tf2_msgs/msg/TFMessage", "publication", LATCHED),
 }
 SERVICES = {"set_task": "SetTask", "reset": "Reset", "sample_tasks": "SampleTasks"}
 FINGERS = ["l_finger_joint", "r_finger_joint"]

@@ -52,6 +52,7 @@ TOPICS = {
     "clock": "rosgraph_msgs/msg/Clock",
     "tf": "tf2_msgs/msg/TFMessage",
     "robot_description": "std_msgs/msg/String",
+    "tf_static": "tf2_msgs/msg/TFMessage",
 }
 SERVICES = {"set_task": "composuite_msgs/srv/SetTask", "reset": "composuite_msgs/srv/Reset",
             "sample_tasks": "composuite_msgs/srv/SampleTasks"}
