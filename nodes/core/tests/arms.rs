@@ -375,7 +375,7 @@ fn bad_commands_are_refused_or_clamped_with_a_reason() {
     assert!(
         clamped[0]
             .to_string()
-            .contains("outside its limits [-3.0718, -0.0698]"),
+            .contains("outside its limits [-3.071800, -0.069800]; using -0.069800"),
         "{}",
         clamped[0]
     );

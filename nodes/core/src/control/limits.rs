@@ -63,9 +63,11 @@ pub struct Clamped {
 
 impl fmt::Display for Clamped {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Six decimals: µrad / µm, enough to read and short (limits like 0.0141 come out of
+        // arithmetic as 0.014100000000000001).
         write!(
             f,
-            "target {} for `{}` is outside its limits [{}, {}]; using {}",
+            "target {:.6} for `{}` is outside its limits [{:.6}, {:.6}]; using {:.6}",
             self.requested, self.joint, self.lower, self.upper, self.applied
         )
     }
