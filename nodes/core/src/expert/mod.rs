@@ -8,16 +8,24 @@
 //! solution so consecutive targets stay on one IK branch.
 //!
 //! Every motion is a straight line of the pads' centre (and a slerp of the gripper's
-//! orientation) with a smoothstep time law over 1–2 s, sampled once per control step.
+//! orientation) with a smoothstep time law over 1–2 s, sampled once per control step, slowed
+//! down (up to 3×) where a joint would move faster than about 1 rad/s — the arms' torque
+//! limits cannot follow faster targets, and a lagging joint bends the path into walls.
+//! Where the line cannot be followed (joint limits) the joints move straight to a
+//! collision-checked IK solution instead, unless that path comes closer to the arena.
+//!
+//! If the object did not rise with the gripper (seen in its observed pose), the gripper
+//! opens, backs off, and the next grasp is tried (at most twice).
 //!
 //! Phases: approach (to the pre-grasp, clear of the object and the obstacles) → descend (the
 //! last stretch into the grasp) → close → lift → transport → the objective's finish (lower
 //! into bin 2 / slide to the goal / over the trash can / into the shelf) → release → retreat
 //! → hold.
 //!
-//! Grasps ([`grasp`]): the box from the top; the hollow box by one wall; the plate by its rim
-//! and the dumbbell by its bar, both from the side with the gripper pointing towards bin 2
-//! (+y), so they go into the shelf without turning. Obstacles are passed over (object wall,
+//! Grasps ([`grasp`]): the box from the top; the hollow box from the top by one wall (the
+//! near one, else the far one); the plate by its rim and the dumbbell by its bar, both from
+//! the side, pointing towards bin 2 (+y) where the arm reaches that way without touching the
+//! arena, else turned towards +x. Obstacles are passed over (object wall,
 //! door) or over / around (goal wall).
 
 mod clearance;

@@ -56,6 +56,9 @@ const SHELF_SIDE_TARGET_Y: f64 = 0.25;
 /// x (m) of the lane into the shelf when the goal wall stands at x −0.10…0.11: past the
 /// wall's free end, so the forearm crosses the wall's line beyond it.
 const SHELF_LANE_PAST_GOAL_WALL_X: f64 = 0.17;
+/// Lanes into the shelf for the box when the goal wall stands at x −0.10…0.11, best first
+/// (the opening spans x −0.1…0.3).
+const SHELF_LANES_PAST_GOAL_WALL_X: [f64; 3] = [0.17, 0.22, 0.26];
 /// Gap (m) between a side-grasped object's bottom and the surface it is put down on before
 /// the fingers open.
 const DROP_GAP: f64 = 0.015;
@@ -359,23 +362,34 @@ impl Expert {
                         self.segment(model, Vector3::new(x, front, z) + held, o, 1.5);
                     }
                     Objective::Shelf => {
-                        // In front of the shelf, then down to the opening's height.
-                        let x = if goal_wall {
-                            SHELF_LANE_PAST_GOAL_WALL_X
-                        } else {
-                            SHELF.position[0]
-                        };
+                        // In front of the shelf, down to the opening's height, turned to it and
+                        // in. With the goal wall, on the first lane past the wall's free end
+                        // along which the arm keeps clear of the arena (the forearm behind the
+                        // sideways gripper crosses the wall's line below its top).
                         let z = SHELF.position[2] + SHELF.z_offset + SHELF_INSERT_HEIGHT;
                         let (front_y, turn_high) = shelf_approach(task.robot);
-                        self.segment(model, Vector3::new(x, front_y, h), o, 2.0);
-                        let o = if turn_high {
-                            let sideways = turned_to_shelf(&o);
-                            self.segment(model, Vector3::new(x, front_y, h), sideways, 2.0);
-                            sideways
+                        let lanes: &[f64] = if goal_wall {
+                            &SHELF_LANES_PAST_GOAL_WALL_X
                         } else {
-                            o
+                            &[SHELF.position[0]]
                         };
-                        self.segment(model, Vector3::new(x, front_y, z), o, 1.5);
+                        self.first_clear(model, lanes, |e, x| {
+                            e.segment(model, Vector3::new(x, front_y, h), o, 2.0);
+                            let o = if turn_high {
+                                let sideways = turned_to_shelf(&o);
+                                e.segment(model, Vector3::new(x, front_y, h), sideways, 2.0);
+                                sideways
+                            } else {
+                                o
+                            };
+                            e.segment(model, Vector3::new(x, front_y, z), o, 1.5);
+                            if !turn_high {
+                                e.segment(model, e.pad, turned_to_shelf(&o), 2.0);
+                            }
+                            let inside = SHELF.position[1] - SHELF.y_size + SHELF_INSERT_DEPTH;
+                            let t = Vector3::new(e.pad.x, inside, e.pad.z);
+                            e.segment(model, t, e.orientation, 2.0);
+                        });
                     }
                     Objective::TrashCan => {
                         let [cx, cy, _] = TRASH_CAN.position;
@@ -392,21 +406,8 @@ impl Expert {
                         let t = Vector3::new(self.pad.x, SHELF_SIDE_TARGET_Y + held.y, self.pad.z);
                         self.segment(model, t, self.orientation, 2.0);
                     }
-                    Objective::Shelf => {
-                        // Turn the gripper (and the box with it) about the closing axis until
-                        // the approach axis points at the shelf (unless it already turned), then go
-                        // straight in along +y.
-                        let sideways = if shelf_approach(task.robot).1 {
-                            self.orientation
-                        } else {
-                            let sideways = turned_to_shelf(&self.orientation);
-                            self.segment(model, self.pad, sideways, 2.0);
-                            sideways
-                        };
-                        let inside = SHELF.position[1] - SHELF.y_size + SHELF_INSERT_DEPTH;
-                        let t = Vector3::new(self.pad.x, inside, self.pad.z);
-                        self.segment(model, t, sideways, 2.0);
-                    }
+                    // Planned with the lane.
+                    Objective::Shelf => self.hold(0.1),
                     Objective::PickPlace if !self.top_down() => self.hold(0.2),
                     Objective::PickPlace => {
                         // Bring the object's bottom 1.5 cm above bin 2's floor.
