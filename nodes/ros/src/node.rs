@@ -435,24 +435,31 @@ impl RosNode {
             .map_err(|e| StartError(format!("subscription {name}: {e:?}")))
     }
 
-    /// A server of service `S` named `name`, in the wire format of `mapping`.
+    /// Service `name` (remaps applied) and the ROS type of `S`.
+    fn service<S: RosService>(&self, name: &str) -> Result<(Name, ServiceTypeName), StartError> {
+        let (package, _, type_name) = split_ros_name(S::ROS_NAME);
+        Ok((
+            self.resolve_name(name)?,
+            ServiceTypeName::new(package, type_name),
+        ))
+    }
+
+    /// A server of service `S` named `name`, in this node's service wire format.
     pub fn server<S: RosService>(
         &mut self,
         name: &str,
-        mapping: ServiceMapping,
     ) -> Result<Server<S::Request, S::Response>, StartError>
     where
         S::Request: Message,
         S::Response: Message,
     {
-        let service_name = self.resolve_name(name)?;
-        let (package, _, type_name) = split_ros_name(S::ROS_NAME);
+        let (service_name, type_name) = self.service::<S>(name)?;
         let qos = crate::qos::services();
         self.node
             .create_server(
-                mapping,
+                self.service_mapping,
                 &service_name,
-                &ServiceTypeName::new(package, type_name),
+                &type_name,
                 qos.clone(),
                 qos,
             )
@@ -468,14 +475,13 @@ impl RosNode {
         S::Request: Message,
         S::Response: Message,
     {
-        let service_name = self.resolve_name(name)?;
-        let (package, _, type_name) = split_ros_name(S::ROS_NAME);
+        let (service_name, type_name) = self.service::<S>(name)?;
         let qos = crate::qos::services();
         self.node
             .create_client(
                 self.service_mapping,
                 &service_name,
-                &ServiceTypeName::new(package, type_name),
+                &type_name,
                 qos.clone(),
                 qos,
             )

@@ -349,10 +349,19 @@ impl Sim {
                 return;
             }
         };
-        if let Some(bad) = arm.iter().chain(finger_gap.iter()).find(|v| !v.is_finite()) {
-            log.warn(format!(
-                "joint_command refused: position {bad} is not finite; every target must be a finite angle (rad) or finger position (m)"
-            ));
+        // Refused on arrival with the core's own checks, so the held targets (what realtime
+        // steps with) never hold a value the next step would refuse.
+        let checked = composuite_core::control::validate_arm_targets(model, &arm)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+            .and_then(|()| match finger_gap {
+                Some(gap) => composuite_core::control::validate_gripper_width(model, gap, 0.0)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string()),
+                None => Ok(()),
+            });
+        if let Err(err) = checked {
+            log.warn(format!("joint_command refused: {err}"));
             return;
         }
         run.arm_targets = arm;

@@ -123,7 +123,6 @@ struct TaskManager {
 /// Run the task manager until SIGINT/SIGTERM.
 pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<(), String> {
     let e = |e: crate::node::StartError| e.to_string();
-    let mapping = node.service_mapping;
     let scene = node.publisher(names::SCENE, qos::latched()).map_err(e)?;
     let status = node.publisher(names::EPISODE, qos::state()).map_err(e)?;
     let world_sub = node
@@ -132,14 +131,10 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let observation_sub = node
         .subscription::<msg::Observation>(names::OBSERVATION, qos::state())
         .map_err(e)?;
-    let set_task = node
-        .server::<srv::SetTask>(names::SET_TASK, mapping)
-        .map_err(e)?;
-    let reset = node
-        .server::<srv::Reset>(names::RESET, mapping)
-        .map_err(e)?;
+    let set_task = node.server::<srv::SetTask>(names::SET_TASK).map_err(e)?;
+    let reset = node.server::<srv::Reset>(names::RESET).map_err(e)?;
     let sample = node
-        .server::<srv::SampleTasks>(names::SAMPLE_TASKS, mapping)
+        .server::<srv::SampleTasks>(names::SAMPLE_TASKS)
         .map_err(e)?;
     let task: TaskSpec = node
         .param_string("task")
