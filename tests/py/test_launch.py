@@ -230,9 +230,18 @@ def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
             observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
             command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
             reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="fastdds")
-            reply = reset.call({"seed": 1, "use_seed": True}, timeout=10)
-            assert reply.success, reply.message
-            first = states.wait_for(None, timeout=10)
+            # The sim's joint_states writer may match our reader only after a reset's step-0
+            # sample went out (each side sees the match on its own): reset until one arrives.
+            for _ in range(5):
+                reply = reset.call({"seed": 1, "use_seed": True}, timeout=10)
+                assert reply.success, reply.message
+                try:
+                    first = states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
+                    break
+                except TimeoutError:
+                    continue
+            else:
+                raise AssertionError("no joint_states after 5 resets")
             bad = DataWriter(agent.participant, Topic(agent.participant, "rt/mal/joint_command", Garbage),
                              qos=ros_agent.QOS_PROFILES["state"].to_dds())
             time.sleep(0.5)
@@ -247,6 +256,46 @@ def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
         errs = [p.communicate(timeout=10)[1] for p in procs]
     assert all(p.returncode == 0 for p in procs), errs
     assert "unreadable joint_command dropped" in errs[1], errs[1]
+
+
+def test_a_reply_written_before_the_clients_reader_exists_does_not_break_the_server():
+    """A reset reply (~1.6 kB, with the related-sample-identity inline QoS every reply carries)
+    written while the reply writer has matched no reader is fragmented at RustDDS' 1452-byte
+    fallback budget. RustDDS 0.15 writes such a DATA_FRAG one byte longer than it declares; with
+    RustDDS' debug assertions on, that panicked the task manager's DDS thread and the node went
+    deaf. Provoke exactly that (a request with no reply reader), then call reset properly."""
+    from cyclonedds.pub import DataWriter
+
+    domain = random.randint(1, 200)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r", "__ns:=/frag",
+                               "-p", "service_mapping:=cyclone"],
+                              env=env, stderr=subprocess.PIPE, text=True)
+             for kind in ("task_manager", "sim")]
+    try:
+        with ros_agent.Agent(namespace="/frag", domain_id=domain) as agent:
+            request_wire, _ = agent.types.cyclone_service("composuite_msgs/srv/Reset")
+            request_topic, _ = ros_agent.service_topic_names("reset", "/frag")
+            orphan = DataWriter(agent.participant, agent._topic(request_topic, request_wire),
+                                qos=ros_agent.qos_profile("services").to_dds())
+            deadline = time.monotonic() + 15
+            while not orphan.get_matched_subscriptions():
+                assert time.monotonic() < deadline, "the task manager's reset server never matched"
+                time.sleep(0.05)
+            orphan.write(request_wire(client_guid=1, seq=1, seed=4, use_seed=True))
+            time.sleep(1.0)  # the task manager answers into the void
+            assert all(p.poll() is None for p in procs)
+            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="cyclone")
+            reply = reset.call({"seed": 5, "use_seed": True}, timeout=10)
+            assert reply.success and reply.seed == 5, reply.message
+            assert len(reply.observation.flat) > 0
+    finally:
+        for p in procs:
+            p.send_signal(signal.SIGINT)
+        errs = [p.communicate(timeout=10)[1] for p in procs]
+    assert all(p.returncode == 0 for p in procs), errs
+    assert "reset: episode" in errs[0], errs[0]
+    assert not any("panicked" in e for e in errs), errs
 
 
 def test_reset_without_a_sim_fails_with_a_reason_instead_of_hanging():

@@ -132,7 +132,10 @@ class Driver:
         not for us. Wait until the nodes' writers know this agent too."""
         missing: list[str] = []
         for _ in range(attempts):
-            reply = self.reset_client.call(timeout=10)
+            try:
+                reply = self.reset_client.call(timeout=10)
+            except TimeoutError as error:
+                raise AssertionError(f"{error}\n{self.suite.all_stderr()}") from None
             assert reply.success, reply.message
             episode, stamp = reply.episode, reply.observation.header.stamp
             try:

@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod convert;
+pub mod dds_log;
 pub mod environment;
 pub mod names;
 pub mod node;

@@ -22,6 +22,7 @@ use ros2_client::{
     ServiceTypeName,
 };
 
+use crate::dds_log;
 use crate::environment::{DiscoveryRange, RosEnvironment};
 use crate::param_server::{ParameterServices, Parameters};
 use crate::params::{self, ParamSpec};
@@ -300,6 +301,10 @@ impl RosNode {
             })?,
             None => Level::Info,
         };
+
+        let dds_level = dds_log::parse_level(std::env::var(dds_log::DDS_LOG_VAR).ok().as_deref())
+            .map_err(StartError)?;
+        dds_log::install(dds_level);
 
         let mut builder = DomainParticipantBuilder::new(environment.domain_id);
         if environment.discovery_range != DiscoveryRange::Subnet {

@@ -393,7 +393,7 @@ impl TaskManager {
         }
         match self.start_episode(seed) {
             Ok((episode, seed)) => {
-                log.debug(format!("reset: episode {episode}, seed {seed}"));
+                log.info(format!("reset: episode {episode}, seed {seed}"));
                 self.pending.push(PendingReset {
                     request: id,
                     episode,
