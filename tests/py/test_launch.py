@@ -205,6 +205,41 @@ def test_remaps_and_node_name_apply_to_a_running_node():
     assert "[rm.arm_sim]" in err
 
 
+class BareNodes:
+    """Node binaries started on their own (no launcher) in `namespace` of a fresh random domain,
+    with the given ROS arguments; on exit they get SIGINT, and `errs` holds each one's stderr
+    (in the order of `kinds`) for the assertions after the block.
+
+        with BareNodes("/ns", ("task_manager", "sim")) as nodes:
+            ... nodes.domain ...
+        assert "..." in nodes.errs[0]
+    """
+
+    def __init__(self, namespace: str, kinds: tuple[str, ...], *ros_args: str):
+        self.namespace, self.kinds, self.ros_args = namespace, kinds, ros_args
+        self.domain = random.randint(1, 200)
+        self.procs: list[subprocess.Popen] = []
+        self.errs: list[str] = []
+
+    def __enter__(self) -> "BareNodes":
+        env = dict(os.environ, ROS_DOMAIN_ID=str(self.domain))
+        self.procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r",
+                                        f"__ns:={self.namespace}", *self.ros_args],
+                                       env=env, stderr=subprocess.PIPE, text=True)
+                      for kind in self.kinds]
+        return self
+
+    def running(self) -> bool:
+        return all(p.poll() is None for p in self.procs)
+
+    def __exit__(self, *exc) -> None:
+        for p in self.procs:
+            p.send_signal(signal.SIGINT)
+        self.errs = [p.communicate(timeout=10)[1] for p in self.procs]
+        if exc[0] is None:
+            assert all(p.returncode == 0 for p in self.procs), self.errs
+
+
 def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
     """A writer whose type has the right name but the wrong layout: our sim cannot decode its
     samples; it must say so and keep serving well-formed commands."""
@@ -219,43 +254,33 @@ def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
     class Garbage(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
         byte: idl.uint8
 
-    domain = random.randint(1, 200)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-    procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r", "__ns:=/mal"],
-                              env=env, stderr=subprocess.PIPE, text=True)
-             for kind in ("task_manager", "sim")]
-    try:
-        with ros_agent.Agent(namespace="/mal", domain_id=domain) as agent:
-            states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
-            observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
-            command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
-            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="fastdds")
-            # The sim's joint_states writer may match our reader only after a reset's step-0
-            # sample went out (each side sees the match on its own): reset until one arrives.
-            for _ in range(5):
-                reply = reset.call({"seed": 1, "use_seed": True}, timeout=10)
-                assert reply.success, reply.message
-                try:
-                    first = states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
-                    break
-                except TimeoutError:
-                    continue
-            else:
-                raise AssertionError("no joint_states after 5 resets")
-            bad = DataWriter(agent.participant, Topic(agent.participant, "rt/mal/joint_command", Garbage),
-                             qos=ros_agent.QOS_PROFILES["state"].to_dds())
-            time.sleep(0.5)
-            for _ in range(3):
-                bad.write(Garbage(byte=7))
-            command.wait_for_subscribers(1, timeout=10)
-            command.publish(name=list(first.name[:7]), position=list(first.position[:7]))
-            observations.wait_for({"episode": reply.episode, "step": 1}, timeout=10)
-    finally:
-        for p in procs:
-            p.send_signal(signal.SIGINT)
-        errs = [p.communicate(timeout=10)[1] for p in procs]
-    assert all(p.returncode == 0 for p in procs), errs
-    assert "unreadable joint_command dropped" in errs[1], errs[1]
+    with BareNodes("/mal", ("task_manager", "sim")) as nodes, \
+            ros_agent.Agent(namespace="/mal", domain_id=nodes.domain) as agent:
+        states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
+        observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
+        command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
+        reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="fastdds")
+        # The sim's joint_states writer may match our reader only after a reset's step-0
+        # sample went out (each side sees the match on its own): reset until one arrives.
+        for _ in range(5):
+            reply = reset.call({"seed": 1, "use_seed": True}, timeout=10)
+            assert reply.success, reply.message
+            try:
+                first = states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
+                break
+            except TimeoutError:
+                continue
+        else:
+            raise AssertionError("no joint_states after 5 resets")
+        bad = DataWriter(agent.participant, Topic(agent.participant, "rt/mal/joint_command", Garbage),
+                         qos=ros_agent.QOS_PROFILES["state"].to_dds())
+        time.sleep(0.5)
+        for _ in range(3):
+            bad.write(Garbage(byte=7))
+        command.wait_for_subscribers(1, timeout=10)
+        command.publish(name=list(first.name[:7]), position=list(first.position[:7]))
+        observations.wait_for({"episode": reply.episode, "step": 1}, timeout=10)
+    assert "unreadable joint_command dropped" in nodes.errs[1], nodes.errs[1]
 
 
 def test_a_reply_written_before_the_clients_reader_exists_does_not_break_the_server():
@@ -266,56 +291,37 @@ def test_a_reply_written_before_the_clients_reader_exists_does_not_break_the_ser
     deaf. Provoke exactly that (a request with no reply reader), then call reset properly."""
     from cyclonedds.pub import DataWriter
 
-    domain = random.randint(1, 200)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-    procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r", "__ns:=/frag",
-                               "-p", "service_mapping:=cyclone"],
-                              env=env, stderr=subprocess.PIPE, text=True)
-             for kind in ("task_manager", "sim")]
-    try:
-        with ros_agent.Agent(namespace="/frag", domain_id=domain) as agent:
-            request_wire, _ = agent.types.cyclone_service("composuite_msgs/srv/Reset")
-            request_topic, _ = ros_agent.service_topic_names("reset", "/frag")
-            orphan = DataWriter(agent.participant, agent._topic(request_topic, request_wire),
-                                qos=ros_agent.qos_profile("services").to_dds())
-            deadline = time.monotonic() + 15
-            while not orphan.get_matched_subscriptions():
-                assert time.monotonic() < deadline, "the task manager's reset server never matched"
-                time.sleep(0.05)
-            orphan.write(request_wire(client_guid=1, seq=1, seed=4, use_seed=True))
-            time.sleep(1.0)  # the task manager answers into the void
-            assert all(p.poll() is None for p in procs)
-            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="cyclone")
-            reply = reset.call({"seed": 5, "use_seed": True}, timeout=10)
-            assert reply.success and reply.seed == 5, reply.message
-            assert len(reply.observation.flat) > 0
-    finally:
-        for p in procs:
-            p.send_signal(signal.SIGINT)
-        errs = [p.communicate(timeout=10)[1] for p in procs]
-    assert all(p.returncode == 0 for p in procs), errs
-    assert "reset: episode" in errs[0], errs[0]
-    assert not any("panicked" in e for e in errs), errs
+    with BareNodes("/frag", ("task_manager", "sim"), "-p", "service_mapping:=cyclone") as nodes, \
+            ros_agent.Agent(namespace="/frag", domain_id=nodes.domain) as agent:
+        request_wire, _ = agent.types.cyclone_service("composuite_msgs/srv/Reset")
+        request_topic, _ = ros_agent.service_topic_names("reset", "/frag")
+        orphan = DataWriter(agent.participant, agent._topic(request_topic, request_wire),
+                            qos=ros_agent.qos_profile("services").to_dds())
+        deadline = time.monotonic() + 15
+        while not orphan.get_matched_subscriptions():
+            assert time.monotonic() < deadline, "the task manager's reset server never matched"
+            time.sleep(0.05)
+        orphan.write(request_wire(client_guid=1, seq=1, seed=4, use_seed=True))
+        time.sleep(1.0)  # the task manager answers into the void
+        assert nodes.running()
+        reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="cyclone")
+        reply = reset.call({"seed": 5, "use_seed": True}, timeout=10)
+        assert reply.success and reply.seed == 5, reply.message
+        assert len(reply.observation.flat) > 0
+    assert "reset: episode" in nodes.errs[0], nodes.errs[0]
+    assert not any("panicked" in e for e in nodes.errs), nodes.errs
 
 
 def test_reset_without_a_sim_fails_with_a_reason_instead_of_hanging():
-    domain = random.randint(1, 200)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-    node = subprocess.Popen([str(bin_dir() / "task_manager_node"), "--ros-args", "-r", "__ns:=/nosim",
-                             "-p", "reset_timeout:=0.5", "-p", "service_mapping:=cyclone"],
-                            env=env, stderr=subprocess.PIPE, text=True)
-    try:
-        with ros_agent.Agent(namespace="/nosim", domain_id=domain) as agent:
-            reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="cyclone")
-            started = time.monotonic()
-            reply = reset.call({"seed": 3, "use_seed": True}, timeout=10, retries=0)
-            assert time.monotonic() - started < 3
-            assert not reply.success
-            assert "is sim_node running in this namespace?" in reply.message, reply.message
-    finally:
-        node.send_signal(signal.SIGINT)
-        _, err = node.communicate(timeout=10)
-    assert node.returncode == 0, err
+    with BareNodes("/nosim", ("task_manager",), "-p", "reset_timeout:=0.5",
+                   "-p", "service_mapping:=cyclone") as nodes, \
+            ros_agent.Agent(namespace="/nosim", domain_id=nodes.domain) as agent:
+        reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="cyclone")
+        started = time.monotonic()
+        reply = reset.call({"seed": 3, "use_seed": True}, timeout=10, retries=0)
+        assert time.monotonic() - started < 3
+        assert not reply.success
+        assert "is sim_node running in this namespace?" in reply.message, reply.message
 
 
 def test_demo_plays_the_expert_over_ros_identically_to_in_process():
