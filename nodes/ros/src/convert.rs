@@ -7,7 +7,7 @@ use std::fmt;
 use composuite_core::TaskSpec;
 use composuite_core::arena::{Placed, Primitive};
 use composuite_core::axes::AxisElement;
-use composuite_core::env::{Env, WorldState};
+use composuite_core::env::{EnvConfig, EpisodeLayout, WorldState};
 use composuite_core::obs::{self, RelativePose};
 use composuite_core::physics::{ARM_DOF, FINGER_JOINTS, RobotModel};
 use composuite_core::reward::StagedReward;
@@ -198,10 +198,9 @@ pub fn scene_part(p: &Placed) -> msg::ScenePart {
     }
 }
 
-/// The scene of the environment's current episode.
-pub fn scene(env: &Env, stamp: Time) -> msg::Scene {
-    let task = env.task();
-    let config = env.config();
+/// The scene of episode `episode`, laid out as `layout`, run with `config`.
+pub fn scene(layout: &EpisodeLayout, config: &EnvConfig, episode: u32, stamp: Time) -> msg::Scene {
+    let task = layout.task;
     let obstacle_pose = match task.obstacle {
         composuite_core::axes::Obstacle::NoObstacle => Pose {
             position: point([0.0; 3]),
@@ -209,27 +208,20 @@ pub fn scene(env: &Env, stamp: Time) -> msg::Scene {
         },
         other => pose(&composuite_core::arena::obstacle_geometry(other).body_pose()),
     };
+    let at = |p: nalgebra::Point3<f64>| pose(&Isometry3::translation(p.x, p.y, p.z));
     msg::Scene {
         header: header(stamp),
         task: task_spec(&task),
-        seed: env.seed(),
-        episode: env.episode(),
+        seed: layout.seed,
+        episode,
         horizon: config.horizon,
         control_period: config.control_period(),
         physics_period: config.physics.dt,
         robot_base_pose: pose(&composuite_core::arena::robot_base_pose()),
-        object_start_pose: pose(&Isometry3::translation(
-            env.object_start().x,
-            env.object_start().y,
-            env.object_start().z,
-        )),
-        goal_pose: pose(&Isometry3::translation(
-            env.goal().x,
-            env.goal().y,
-            env.goal().z,
-        )),
+        object_start_pose: at(layout.object_start),
+        goal_pose: at(layout.goal),
         obstacle_pose,
-        parts: env.scene_parts().iter().map(scene_part).collect(),
+        parts: layout.parts().iter().map(scene_part).collect(),
     }
 }
 

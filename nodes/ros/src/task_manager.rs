@@ -9,7 +9,7 @@
 use std::time::{Duration, Instant};
 
 use composuite_core::TaskSpec;
-use composuite_core::env::{Env, EnvConfig, MAX_SEED};
+use composuite_core::env::{EnvConfig, EpisodeLayout, MAX_SEED};
 use composuite_core::reward::{staged_reward, termination};
 use composuite_core::sampling::{Experiment, sample_tasks};
 use composuite_msgs::msg;
@@ -116,8 +116,6 @@ struct TaskManager {
     pending: Vec<PendingReset>,
     scene: Publisher<msg::Scene>,
     status: Publisher<msg::EpisodeStatus>,
-    /// The scene's composer: an `Env` of the current task, reset with the episode's seed.
-    composer: Option<Env>,
 }
 
 /// Run the task manager until SIGINT/SIGTERM.
@@ -151,7 +149,6 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         pending: Vec::new(),
         scene,
         status,
-        composer: None,
     };
     let log = node.log.clone();
     log.info(format!(
@@ -249,21 +246,14 @@ impl TaskManager {
     /// Compose and publish the scene of a new episode of the current task.
     fn start_episode(&mut self, seed: Option<u64>) -> Result<(u32, u64), String> {
         let seed = seed.unwrap_or(self.next_seed);
-        let config = EnvConfig::default().horizon(self.horizon);
-        let mut composer = match self.composer.take() {
-            Some(env) if env.task() == self.task && *env.config() == config => env,
-            _ => Env::new(self.task, config),
-        };
-        let result = composer.reset(seed);
-        self.composer = Some(composer);
-        result.map_err(|e| e.to_string())?;
+        // Laid out exactly as the sim's reset(seed) will place it (same core function).
+        let layout = EpisodeLayout::new(self.task, seed).map_err(|e| e.to_string())?;
         self.episodes_started += 1;
         let number = self.episodes_started;
         self.next_seed = if seed >= MAX_SEED { 0 } else { seed + 1 };
         self.end_current(msg::EpisodeStatus::REASON_RESET, "a new episode started");
-        let env = self.composer.as_ref().expect("set above");
-        let mut scene = convert::scene(env, convert::time_from_nanos(0));
-        scene.episode = number;
+        let config = EnvConfig::default().horizon(self.horizon);
+        let scene = convert::scene(&layout, &config, number, convert::time_from_nanos(0));
         self.scene
             .publish(scene)
             .map_err(|e| format!("scene publish failed: {e:?}"))?;

@@ -1,6 +1,6 @@
 //! Conversions to the wire types and the `--ros-args` parser.
 
-use composuite_core::env::{Action, Env, EnvConfig};
+use composuite_core::env::{Action, Env, EnvConfig, EpisodeLayout};
 use composuite_msgs::{RosMessage, cdr, msg};
 use composuite_ros::convert::{self, JointCommandError};
 use composuite_ros::ros_args::{self, ParamValue};
@@ -57,7 +57,18 @@ fn no_obstacle_keeps_the_zero_quaternion_on_the_wire() {
     let m = convert::observation(&obs, convert::time_from_nanos(0), 1, 0);
     let q = &m.obstacle.orientation;
     assert_eq!((q.x, q.y, q.z, q.w), (0.0, 0.0, 0.0, 0.0));
-    let scene = convert::scene(&env, convert::time_from_nanos(0));
+    let scene = convert::scene(&env.layout(), env.config(), 1, convert::time_from_nanos(0));
+    // The layout alone (no physics world) gives the same scene.
+    let layout = EpisodeLayout::new("IIWA/box/no_obstacle/pick_place".parse().unwrap(), 0).unwrap();
+    assert_eq!(
+        convert::scene(
+            &layout,
+            &EnvConfig::default(),
+            1,
+            convert::time_from_nanos(0)
+        ),
+        scene
+    );
     assert_eq!(scene.obstacle_pose.orientation.w, 0.0);
     assert_eq!(scene.task.task_index, 0);
     assert_eq!(scene.horizon, 500);

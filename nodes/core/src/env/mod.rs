@@ -11,19 +11,21 @@
 //! ```
 
 mod action;
+mod layout;
 mod reset;
 mod world_state;
 
 use std::fmt;
 
-use nalgebra::{Isometry3, Point3, UnitQuaternion};
+use nalgebra::{Isometry3, Point3};
 
 pub use action::Action;
+pub use layout::EpisodeLayout;
 pub use reset::{MAX_SEED, sample_object_start};
 pub use world_state::WorldState;
 
 use crate::TaskSpec;
-use crate::arena::{Placed, arena_parts, goal_marker_parts, goal_position, obstacle_geometry};
+use crate::arena::{Placed, arena_parts, goal_position, obstacle_geometry};
 use crate::axes::Obstacle;
 use crate::control::{ArmCommandError, Clamped, GripperCommandError};
 use crate::obs::{GoalFactor, Observation, RelativePose, RobotFactor, TaskFactor, xyzw};
@@ -396,20 +398,19 @@ impl Env {
         self.goal
     }
 
+    /// Where this episode's arena, object start and goal are.
+    pub fn layout(&self) -> EpisodeLayout {
+        EpisodeLayout {
+            task: self.task,
+            seed: self.seed,
+            object_start: self.object_start,
+            goal: self.goal,
+        }
+    }
+
     /// Every static solid, the object at its start pose, and the goal marker, in the world.
     pub fn scene_parts(&self) -> Vec<Placed> {
-        let mut parts = arena_parts(self.task.objective, self.task.obstacle);
-        let start = Isometry3::from_parts(self.object_start.into(), UnitQuaternion::identity());
-        parts.extend(
-            crate::arena::object_parts(self.task.object)
-                .into_iter()
-                .map(|p| Placed {
-                    pose: start * p.pose,
-                    ..p
-                }),
-        );
-        parts.extend(goal_marker_parts(self.task.objective, self.task.object));
-        parts
+        self.layout().parts()
     }
 
     /// The simulated world (read only; commands go through [`Env::step`]).
