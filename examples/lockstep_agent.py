@@ -67,27 +67,43 @@ class LockstepEnv:
             self.joint_names = list(message.name[:ARM_JOINTS])
 
     def _spin_until(self, done, what: str) -> None:
-        deadline = time.monotonic() + self.timeout
+        if not self._spin_for(done, self.timeout):
+            raise TimeoutError(f"no {what} within {self.timeout} s; is the suite running (lockstep)?")
+
+    def _spin_for(self, done, seconds: float) -> bool:
+        """Spin until `done()` or `seconds` passed; whether it is done."""
+        deadline = time.monotonic() + seconds
         while not done():
             if time.monotonic() > deadline:
-                raise TimeoutError(f"no {what} within {self.timeout} s; is the suite running (lockstep)?")
+                return False
             self.executor.spin_once(timeout_sec=0.01)
+        return True
 
-    def reset(self, seed: int | None = None) -> Observation:
-        self._spin_until(self.reset_client.service_is_ready, "reset service")
+    def reset(self, seed: int | None = None, attempts: int = 5) -> Observation:
+        """Start an episode (`seed`, or the suite's next one) and return its step-0 observation.
+
+        Right after discovery each side learns of the other on its own, so the first reply, or
+        the step-0 `joint_states` this agent takes the joint names from, can go out before the
+        suite knows this agent: ask again (a retry without a seed moves on to the next seed)."""
         request = Reset.Request(seed=seed or 0, use_seed=seed is not None)
-        future = self.reset_client.call_async(request)
-        self._spin_until(future.done, "reset reply")
-        reply = future.result()
-        if not reply.success:
-            raise RuntimeError(f"reset refused: {reply.message}")
-        self.observations.clear()
-        self.rewards.clear()
-        self.statuses.clear()
-        self.episode, self.step_count = reply.episode, 0
-        # The joint names come with the first joint_states (published at every reset and step).
-        self._spin_until(lambda: bool(self.joint_names), "joint_states")
-        return reply.observation
+        for _ in range(attempts):
+            self._spin_until(self.reset_client.service_is_ready, "reset service")
+            future = self.reset_client.call_async(request)
+            if not self._spin_for(future.done, min(self.timeout, 3.0)):
+                self.reset_client.remove_pending_request(future)
+                continue
+            reply = future.result()
+            if not reply.success:
+                raise RuntimeError(f"reset refused: {reply.message}")
+            self.observations.clear()
+            self.rewards.clear()
+            self.statuses.clear()
+            self.episode, self.step_count = reply.episode, 0
+            # The joint names come with joint_states (published at every reset and step).
+            if self._spin_for(lambda: bool(self.joint_names), 1.0):
+                return reply.observation
+        raise TimeoutError(f"no reset reply with joint_states after {attempts} attempts; "
+                           "is the suite running (lockstep) in this namespace?")
 
     def step(self, targets: list[float]):
         key = (self.episode, self.step_count + 1)

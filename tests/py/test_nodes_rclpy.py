@@ -104,17 +104,23 @@ class RclpyAgent:
                 raise AssertionError(f"timed out after {timeout} s waiting for {what}")
             self.executor.spin_once(timeout_sec=min(remaining, 0.05))
 
-    def call(self, client, request, timeout: float = TIMEOUT):
+    def call(self, client, request, timeout: float = TIMEOUT, attempt: float = 3.0):
         """A service call: wait for the server, send, spin until the reply (no
-        spin_until_future_complete: its 7.1.6 slow-down with service futures)."""
+        spin_until_future_complete: its 7.1.6 slow-down with service futures). A reply sent
+        before the server's reply writer matched this client is lost (each side sees the
+        match on its own): after `attempt` s without one, ask again, until `timeout`."""
         assert client.wait_for_service(timeout_sec=timeout), f"service {client.srv_name} not available"
-        future = client.call_async(request)
-        try:
-            self.spin_until(future.done, timeout, f"the reply of {client.srv_name}")
-        except AssertionError:
-            client.remove_pending_request(future)
-            raise
-        return future.result()
+        deadline = time.monotonic() + timeout
+        while True:
+            future = client.call_async(request)
+            try:
+                self.spin_until(future.done, min(attempt, max(deadline - time.monotonic(), 0.01)),
+                                f"the reply of {client.srv_name}")
+                return future.result()
+            except AssertionError:
+                client.remove_pending_request(future)
+                if time.monotonic() >= deadline:
+                    raise
 
 
 @pytest.fixture(scope="module")
