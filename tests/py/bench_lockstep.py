@@ -22,6 +22,7 @@ import signal
 import statistics
 import subprocess
 import sys
+import threading
 import time
 
 import ros_agent
@@ -36,7 +37,46 @@ ARM_JOINTS = 7
 WAIT_FOR_REWARD = os.environ.get("BENCH_OBSERVATION_ONLY") != "1"
 
 
-def bench_task(composuite: str, task: str, steps: int, horizon: int) -> dict:
+class RssSampler:
+    """Every `every` s, one stderr line with the agent steps done and the resident memory of each
+    node the launcher started (a soak: `--steps 1000000 --rss-every 60`)."""
+
+    def __init__(self, launcher_pid: int, every: float, steps_done):
+        self.launcher_pid, self.every, self.steps_done = launcher_pid, every, steps_done
+        self.started = time.monotonic()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _nodes(self) -> dict[str, int]:
+        """{node kind: RSS kB} of the launcher's children (`composuite node KIND ...`)."""
+        out = {}
+        try:
+            children = open(f"/proc/{self.launcher_pid}/task/{self.launcher_pid}/children").read().split()
+        except OSError:
+            return out
+        for pid in children:
+            try:
+                args = open(f"/proc/{pid}/cmdline", "rb").read().split(b"\0")
+                rss = next(line for line in open(f"/proc/{pid}/status") if line.startswith("VmRSS"))
+            except (OSError, StopIteration):
+                continue
+            kind = args[2].decode() if len(args) > 2 else pid
+            out[kind] = int(rss.split()[1])
+        return out
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.every):
+            nodes = " ".join(f"{k} {v / 1024:.1f} MB" for k, v in sorted(self._nodes().items()))
+            print(f"rss: {time.monotonic() - self.started:7.0f} s  {self.steps_done():9d} steps  {nodes}",
+                  file=sys.stderr, flush=True)
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: float = 0.0) -> dict:
     domain = random.randint(1, 200)
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
     suite = subprocess.Popen(
@@ -54,15 +94,24 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int) -> dict:
             command.wait_for_subscribers(1, timeout=20)
             observations.wait_for_publishers(timeout=20)
             rewards.wait_for_publishers(timeout=20)
-            # joint_states is published at each reset and step: start an episode to see one.
-            reset.call({"seed": 0, "use_seed": True}, timeout=10)
-            first = states.wait_for(None, timeout=20)
+            # joint_states is published at each reset and step: start an episode to see one (and
+            # again if the sim sent it before its writer matched our reader).
+            for _ in range(5):
+                reply = reset.call({"seed": 0, "use_seed": True}, timeout=10)
+                try:
+                    first = states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
+                    break
+                except TimeoutError:
+                    continue
+            else:
+                raise TimeoutError("no joint_states after 5 resets")
+            sampler = RssSampler(suite.pid, rss_every, lambda: done) if rss_every else None
+            done = 0
             names = list(first.name[:ARM_JOINTS])
             home = list(first.position[:ARM_JOINTS])
             rng = random.Random(7)
             latencies: list[float] = []
             reset_times: list[float] = []
-            done = 0
             t_start = time.perf_counter()
             while done < steps:
                 t0 = time.perf_counter()
@@ -85,6 +134,8 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int) -> dict:
                 rewards.clear()
                 states.clear()
             wall = time.perf_counter() - t_start
+            if sampler:
+                sampler.stop()
     finally:
         suite.send_signal(signal.SIGINT)
         try:
@@ -117,11 +168,13 @@ def main() -> None:
     parser.add_argument("--horizon", type=int, default=500, help="steps per episode")
     parser.add_argument("--tasks", nargs="*", default=REFERENCE_TASKS)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--rss-every", type=float, default=0.0, metavar="SECONDS",
+                        help="soak: print the nodes' resident memory every SECONDS (stderr)")
     args = parser.parse_args()
     results = []
     for task in args.tasks:
         print(f"bench: {task} ...", file=sys.stderr, flush=True)
-        results.append(bench_task(args.composuite, task, args.steps, args.horizon))
+        results.append(bench_task(args.composuite, task, args.steps, args.horizon, args.rss_every))
     if args.json:
         print(json.dumps(results, indent=1))
         return
