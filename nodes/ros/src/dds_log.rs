@@ -55,6 +55,11 @@ pub fn install(level: log::LevelFilter) {
     log::set_max_level(level);
 }
 
+/// No more DDS records (the process is shutting its participant down).
+pub fn quiet() {
+    log::set_max_level(log::LevelFilter::Off);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
