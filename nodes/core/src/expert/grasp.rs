@@ -10,12 +10,15 @@ use nalgebra::{Point3, Unit, UnitQuaternion, Vector3};
 use crate::arena::object_geometry;
 use crate::axes::{Object, Objective, Obstacle};
 use crate::kinematics::{frame_from_axes, link_pose};
-use crate::physics::{ARM_DOF, RobotModel};
+use crate::physics::{ARM_DOF, FINGER_OPEN, RobotModel, pad_gap};
 
 use super::motion::reach_cost;
 
-/// Gripper opening (m) while approaching and releasing: fully open (the pads reach 0.0788).
-pub(super) const OPEN: f64 = 0.08;
+/// Gripper opening (m) while approaching and releasing: fully open, the pads' gap with the
+/// fingers at their limit (0.0788; a larger command is clamped by the environment).
+pub(super) fn open() -> f64 {
+    pad_gap(FINGER_OPEN)
+}
 /// Gripper opening (m) commanded to grasp (the 20 N finger servos then hold the object).
 pub(super) const CLOSED: f64 = 0.0;
 
@@ -100,27 +103,42 @@ pub(super) fn grasp_candidates(input: &GraspInput) -> Vec<Grasp> {
             };
             vec![near, far]
         }
-        Object::Dumbbell => side_grasps(|h| dumbbell_grasps_towards(input.position, h)),
-        Object::Plate => side_grasps(|h| plate_grasps_towards(input.position, h)),
+        Object::Dumbbell => side_grasps(input, |h| dumbbell_grasps_towards(input.position, h)),
+        Object::Plate => side_grasps(input, |h| plate_grasps_towards(input.position, h)),
     }
 }
 
 /// The horizontal directions a side grasp may point in, best first: +y (towards bin 2, so
 /// the object goes into the shelf without turning), then turning towards +x (away from the
 /// robot), which arms with a shorter reach need for objects on bin 1's far side.
-fn side_headings() -> [Vector3<f64>; 4] {
+///
+/// Pushing past the goal wall, −y first: the gripper then leads the object and ends on the
+/// goal's far side, its wrist over bin 2 instead of over the wall behind the goal (pointing
+/// +y the gripper and wrist would end 5–15 cm behind the goal, across the wall's line
+/// below its top).
+fn side_headings(objective: Objective, obstacle: Obstacle) -> Vec<Vector3<f64>> {
     let d = std::f64::consts::FRAC_1_SQRT_2;
-    [
+    let usual = [
         Vector3::y(),
         Vector3::new(d, d, 0.0),
         Vector3::x(),
         Vector3::new(d, -d, 0.0),
-    ]
+    ];
+    if objective == Objective::Push && obstacle == Obstacle::GoalWall {
+        let mut headings = vec![-Vector3::y(), Vector3::new(d, -d, 0.0)];
+        headings.extend(&usual[..3]);
+        headings
+    } else {
+        usual.to_vec()
+    }
 }
 
 /// The grasps each heading allows, best heading first.
-fn side_grasps(grasps_at: impl Fn(Vector3<f64>) -> Vec<Grasp>) -> Vec<Grasp> {
-    side_headings().into_iter().flat_map(grasps_at).collect()
+fn side_grasps(input: &GraspInput, grasps_at: impl Fn(Vector3<f64>) -> Vec<Grasp>) -> Vec<Grasp> {
+    side_headings(input.objective, input.obstacle)
+        .into_iter()
+        .flat_map(grasps_at)
+        .collect()
 }
 
 /// The dumbbell by its bar, from the side: the approach axis leaning down, the fingers
@@ -137,7 +155,7 @@ fn dumbbell_grasps_towards(position: Point3<f64>, h: Vector3<f64>) -> Vec<Grasp>
             // Slide in level, between the discs.
             approach: h,
             backoff: 0.08,
-            open: OPEN,
+            open: open(),
             top_down: false,
         })
         .to_vec()
@@ -199,7 +217,7 @@ fn top_grasp(input: &GraspInput) -> Grasp {
         pad,
         approach: -Vector3::z(),
         backoff: 0.12,
-        open: OPEN,
+        open: open(),
         top_down: true,
     }
 }
