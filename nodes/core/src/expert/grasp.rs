@@ -103,42 +103,27 @@ pub(super) fn grasp_candidates(input: &GraspInput) -> Vec<Grasp> {
             };
             vec![near, far]
         }
-        Object::Dumbbell => side_grasps(input, |h| dumbbell_grasps_towards(input.position, h)),
-        Object::Plate => side_grasps(input, |h| plate_grasps_towards(input.position, h)),
+        Object::Dumbbell => side_grasps(|h| dumbbell_grasps_towards(input.position, h)),
+        Object::Plate => side_grasps(|h| plate_grasps_towards(input.position, h)),
     }
 }
 
 /// The horizontal directions a side grasp may point in, best first: +y (towards bin 2, so
 /// the object goes into the shelf without turning), then turning towards +x (away from the
 /// robot), which arms with a shorter reach need for objects on bin 1's far side.
-///
-/// Pushing past the goal wall, −y first: the gripper then leads the object and ends on the
-/// goal's far side, its wrist over bin 2 instead of over the wall behind the goal (pointing
-/// +y the gripper and wrist would end 5–15 cm behind the goal, across the wall's line
-/// below its top).
-fn side_headings(objective: Objective, obstacle: Obstacle) -> Vec<Vector3<f64>> {
+fn side_headings() -> [Vector3<f64>; 4] {
     let d = std::f64::consts::FRAC_1_SQRT_2;
-    let usual = [
+    [
         Vector3::y(),
         Vector3::new(d, d, 0.0),
         Vector3::x(),
         Vector3::new(d, -d, 0.0),
-    ];
-    if objective == Objective::Push && obstacle == Obstacle::GoalWall {
-        let mut headings = vec![-Vector3::y(), Vector3::new(d, -d, 0.0)];
-        headings.extend(&usual[..3]);
-        headings
-    } else {
-        usual.to_vec()
-    }
+    ]
 }
 
 /// The grasps each heading allows, best heading first.
-fn side_grasps(input: &GraspInput, grasps_at: impl Fn(Vector3<f64>) -> Vec<Grasp>) -> Vec<Grasp> {
-    side_headings(input.objective, input.obstacle)
-        .into_iter()
-        .flat_map(grasps_at)
-        .collect()
+fn side_grasps(grasps_at: impl Fn(Vector3<f64>) -> Vec<Grasp>) -> Vec<Grasp> {
+    side_headings().into_iter().flat_map(grasps_at).collect()
 }
 
 /// The dumbbell by its bar, from the side: the approach axis leaning down, the fingers

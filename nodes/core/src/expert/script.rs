@@ -14,9 +14,7 @@ use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel, robot_model};
 
 use super::clearance::{Clearance, MIN_CLEARANCE, best_clear};
 use super::grasp::{CLOSED, Grasp, GraspInput, grasp_candidates, open};
-use super::motion::{
-    PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_solutions, smoothstep, steps,
-};
+use super::motion::{PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_solutions, smoothstep, steps};
 
 /// Pad-centre height (m) that clears the object wall and door (tops at z 1.07).
 const OVER_OBJECT_WALL_Z: f64 = 1.17;
@@ -40,10 +38,11 @@ const UNLIFTABLE: f64 = 0.5;
 const MAX_RETRIES: usize = 2;
 /// Object-centre height (m) for a plain lift and carry.
 const CARRY_Z: f64 = 1.05;
-/// How far above the object's resting height the object is carried while pushing (m).
+/// How far above the object's resting height a top-grasped object is carried while pushing
+/// where no goal wall is in the way (m).
 const PUSH_LIFT: f64 = 0.012;
-/// Object-centre height (m) a side-grasped object is carried at while pushing: just under
-/// the 0.9 m line whose crossing ends a Push episode.
+/// Object-centre height (m) a side-grasped object, or any object past the goal wall, is
+/// carried at while pushing: just under the 0.9 m line whose crossing ends a Push episode.
 const PUSH_SIDE_CARRY_Z: f64 = 0.885;
 /// Inner face of bin 2's far wall (x, m; facts §2.1).
 const BIN2_FAR_WALL_X: f64 = 0.29;
@@ -256,9 +255,6 @@ impl Expert {
                 let mut best: Option<(Grasp, f64)> = None;
                 for grasp in candidates {
                     let gap = self.plan_approach(model, &grasp, clear_z);
-                    if std::env::var("EXPERT_DEBUG").is_ok() {
-                        eprintln!("grasp approach {:?} pad {:?} gap {gap:.4}", grasp.approach.as_slice(), grasp.pad.as_slice());
-                    }
                     if gap >= MIN_CLEARANCE {
                         best = None;
                         break;
@@ -291,10 +287,9 @@ impl Expert {
                 self.phase = Phase::Lift;
                 let rest = self.grasp_object.z;
                 let lift_to = match task.objective {
-                    // Round the goal wall the forearm passes over the wall's free end: carry
-                    // as high as Push allows.
                     Objective::Push if self.top_down() && !goal_wall => rest + PUSH_LIFT,
-                    // Side grasps hold the wrist low: carry as high as Push allows.
+                    // Side grasps hold the wrist low, and round the goal wall the forearm
+                    // passes over the wall's free end: carry as high as Push allows.
                     Objective::Push => PUSH_SIDE_CARRY_Z.max(rest + PUSH_LIFT),
                     _ if goal_wall => OVER_GOAL_WALL_Z,
                     _ if walled => OVER_OBJECT_WALL_Z,
@@ -344,8 +339,10 @@ impl Expert {
                         let goal = env.goal();
                         let t = Vector3::new(goal.x + held.x, goal.y + held.y, h);
                         let lanes: &[Option<f64>] = if self.top_down() {
-                            // The box's fingertips pass just over the floor: no clearance
-                            // check, the lanes measured for it.
+                            // The box's fingertips pass just over the floor: straight, no
+                            // clearance check. Past the goal wall (carried high) the first lane
+                            // that keeps clear; the nearer one for arms that do not reach
+                            // the other with the gripper pointing down this low.
                             if goal_wall {
                                 &[Some(AROUND_GOAL_WALL_X), Some(NEAR_GOAL_WALL_X)]
                             } else {
@@ -368,7 +365,8 @@ impl Expert {
                             .flat_map(|&lean| lanes.iter().map(move |&lane| (lane, lean)))
                             .collect();
                         self.first_clear(model, &options, |e, (lane, lean)| {
-                            let leaning = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -lean) * o;
+                            let leaning =
+                                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -lean) * o;
                             if let Some(lane) = lane {
                                 // The object itself must pass inside bin 2's far wall.
                                 let radius = object_geometry(task.object).horizontal_radius;
@@ -593,7 +591,8 @@ impl Expert {
 
     /// Plans the approach to `grasp`'s pre-grasp (up to `clear_z`, over, down) and returns the
     /// smallest clearance from the arena along it and along the last stretch into the grasp
-    /// (which is planned only later, from where the object is then).
+    /// (which is planned only later, from where the object is then), less [`UNLIFTABLE`] if
+    /// the gripper cannot then rise straight, less [`UNREACHED`] if a pose is out of reach.
     fn plan_approach(&mut self, model: &RobotModel, grasp: &Grasp, clear_z: f64) -> f64 {
         self.missed = false;
         self.grasp = Some(*grasp);
@@ -711,13 +710,6 @@ impl Expert {
         }
         let q = *line.last().expect("at least one step");
         self.straight &= all_met;
-        if std::env::var("EXPERT_DEBUG").is_ok() {
-            eprintln!(
-                "segment {:?} -> {:?} n {} met {} end {} gap {:.4}",
-                self.phase, pad.as_slice(), n, all_met, end_met,
-                self.path_clearance(model, &line)
-            );
-        }
         if !all_met && let Some(goal) = self.best_solution(model, &q0, pad, orientation) {
             // The straight line runs into a joint limit: move the joints straight instead —
             // unless the line still ends on its goal and the joint-space path comes closer to
