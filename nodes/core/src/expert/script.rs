@@ -618,14 +618,22 @@ impl Expert {
         // The first stretch of the lift, not counted in the clearance (the object is lifted
         // off the floor): a grasp from which the gripper cannot rise straight would drag the
         // object over the floor.
+        // Not behind the object wall or door, where the approach over the wall decides and a
+        // grasp that needs a joint-space lift still works (measured: Panda/dumbbell/wall/shelf).
         self.straight = true;
         let rise = if self.task.objective == Objective::Push {
             PUSH_LIFT_CHECK
         } else {
             LIFT_CHECK
         };
-        let lift = grasp.pad + Vector3::z() * rise;
-        self.segment(model, lift, grasp.orientation, 1.0);
+        let walled = matches!(
+            self.task.obstacle,
+            Obstacle::ObjectWall | Obstacle::ObjectDoor
+        );
+        if !walled {
+            let lift = grasp.pad + Vector3::z() * rise;
+            self.segment(model, lift, grasp.orientation, 1.0);
+        }
         let liftable = self.straight;
         self.plan.truncate(planned);
         (self.q, self.pad, self.orientation) = at_pre;
