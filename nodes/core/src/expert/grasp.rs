@@ -10,12 +10,15 @@ use nalgebra::{Point3, Unit, UnitQuaternion, Vector3};
 use crate::arena::object_geometry;
 use crate::axes::{Object, Objective, Obstacle};
 use crate::kinematics::{frame_from_axes, link_pose};
-use crate::physics::{ARM_DOF, RobotModel};
+use crate::physics::{ARM_DOF, FINGER_OPEN, RobotModel, pad_gap};
 
 use super::motion::reach_cost;
 
-/// Gripper opening (m) while approaching and releasing: fully open (the pads reach 0.0788).
-pub(super) const OPEN: f64 = 0.08;
+/// Gripper opening (m) while approaching and releasing: fully open, the pads' gap with the
+/// fingers at their limit (0.0788; a larger command is clamped by the environment).
+pub(super) fn open() -> f64 {
+    pad_gap(FINGER_OPEN)
+}
 /// Gripper opening (m) commanded to grasp (the 20 N finger servos then hold the object).
 pub(super) const CLOSED: f64 = 0.0;
 
@@ -137,7 +140,7 @@ fn dumbbell_grasps_towards(position: Point3<f64>, h: Vector3<f64>) -> Vec<Grasp>
             // Slide in level, between the discs.
             approach: h,
             backoff: 0.08,
-            open: OPEN,
+            open: open(),
             top_down: false,
         })
         .to_vec()
@@ -199,7 +202,7 @@ fn top_grasp(input: &GraspInput) -> Grasp {
         pad,
         approach: -Vector3::z(),
         backoff: 0.12,
-        open: OPEN,
+        open: open(),
         top_down: true,
     }
 }

@@ -14,6 +14,11 @@
 //! Where the line cannot be followed (joint limits) the joints move straight to a
 //! collision-checked IK solution instead, unless that path comes closer to the arena.
 //!
+//! A grasp counts as usable only if the gripper can rise straight from it (10 cm; Push 3 cm):
+//! lifting from a pose at the edge of the arm's reach swings the joints and drags the object
+//! over the floor. Where nothing but bin 2's walls has to be cleared, the carry height comes
+//! down (1.05 → 0.93 m) until the lift is a straight line.
+//!
 //! If the object did not rise with the gripper (seen in its observed pose), the gripper
 //! opens, backs off, and the next grasp is tried (at most twice).
 //!
@@ -26,7 +31,10 @@
 //! near one, else the far one); the plate by its rim and the dumbbell by its bar, both from
 //! the side, pointing towards bin 2 (+y) where the arm reaches that way without touching the
 //! arena, else turned towards +x. Obstacles are passed over (object wall,
-//! door) or over / around (goal wall).
+//! door) or over / around (goal wall). Pushing around the goal wall, a top-grasped object is
+//! carried as high as Push allows and the gripper may lean (wrist towards +y) so the forearm
+//! clears the wall's free end. A side-grasped object is turned level in front of the shelf,
+//! so the wrist behind the gripper passes under the shelf's top block.
 
 mod clearance;
 mod grasp;

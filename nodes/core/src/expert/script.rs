@@ -13,7 +13,7 @@ use crate::kinematics::link_pose;
 use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel, robot_model};
 
 use super::clearance::{Clearance, MIN_CLEARANCE, best_clear};
-use super::grasp::{CLOSED, Grasp, GraspInput, OPEN, grasp_candidates};
+use super::grasp::{CLOSED, Grasp, GraspInput, grasp_candidates, open};
 use super::motion::{PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_solutions, smoothstep, steps};
 
 /// Pad-centre height (m) that clears the object wall and door (tops at z 1.07).
@@ -26,14 +26,23 @@ const MAX_JOINT_STEP: f64 = 0.05;
 /// What a plan that ends short of one of its poses counts as lost clearance (m): any plan that
 /// reaches its poses is preferred.
 const UNREACHED: f64 = 1.0;
+/// How high (m) the gripper must rise straight from a grasp for it to count as liftable: over
+/// bin 2's walls (Push: just off the floor).
+const LIFT_CHECK: f64 = 0.1;
+/// The same for Push.
+const PUSH_LIFT_CHECK: f64 = 0.03;
+/// What a grasp that cannot be lifted straight counts as lost clearance (m): less than an
+/// unreached one.
+const UNLIFTABLE: f64 = 0.5;
 /// Grasps tried again after one that did not lift the object.
 const MAX_RETRIES: usize = 2;
 /// Object-centre height (m) for a plain lift and carry.
 const CARRY_Z: f64 = 1.05;
-/// How far above the object's resting height the object is carried while pushing (m).
+/// How far above the object's resting height a top-grasped object is carried while pushing
+/// where no goal wall is in the way (m).
 const PUSH_LIFT: f64 = 0.012;
-/// Object-centre height (m) a side-grasped object is carried at while pushing: just under
-/// the 0.9 m line whose crossing ends a Push episode.
+/// Object-centre height (m) a side-grasped object, or any object past the goal wall, is
+/// carried at while pushing: just under the 0.9 m line whose crossing ends a Push episode.
 const PUSH_SIDE_CARRY_Z: f64 = 0.885;
 /// Inner face of bin 2's far wall (x, m; facts §2.1).
 const BIN2_FAR_WALL_X: f64 = 0.29;
@@ -41,6 +50,12 @@ const BIN2_FAR_WALL_X: f64 = 0.29;
 const PUSH_WIDE_LANE_X: f64 = 0.26;
 /// x (m) of the lane that goes around the goal wall's free end (the wall ends at x 0.11).
 const AROUND_GOAL_WALL_X: f64 = 0.22;
+/// x (m) of a lane just past the goal wall's free end with a small object's edge 2 cm clear
+/// of it, for arms that do not reach [`AROUND_GOAL_WALL_X`] with a top grasp this low.
+const NEAR_GOAL_WALL_X: f64 = 0.17;
+/// How far (rad) the gripper may lean about the x axis (its wrist towards +y) while pushing
+/// past the goal wall, least first.
+const PUSH_LEANS: [f64; 3] = [0.0, 0.3, 0.55];
 /// How far (rad) the approach axis leans towards the robot when walls are near the arm.
 const GRASP_TILT: f64 = 0.45;
 /// Height (m) of the carried box's centre above the shelf board while inserting: midway in
@@ -59,6 +74,9 @@ const SHELF_LANE_PAST_GOAL_WALL_X: f64 = 0.17;
 /// Lanes into the shelf for the box when the goal wall stands at x −0.10…0.11, best first
 /// (the opening spans x −0.1…0.3).
 const SHELF_LANES_PAST_GOAL_WALL_X: [f64; 3] = [0.17, 0.22, 0.26];
+/// Lower object-centre heights (m) to carry at where [`CARRY_Z`] is out of reach and nothing
+/// needs clearing but bin 2's walls (tops at z 0.90).
+const LOWER_CARRIES_Z: [f64; 3] = [1.0, 0.96, 0.93];
 /// Gap (m) between a side-grasped object's bottom and the surface it is put down on before
 /// the fingers open.
 const DROP_GAP: f64 = 0.015;
@@ -133,6 +151,9 @@ pub struct Expert {
     /// Whether a segment planned since this was last cleared ends short of its pose (the
     /// IK found no joints for it).
     missed: bool,
+    /// Whether every segment planned since this was last set follows its straight line (none
+    /// needed a joint-space move, whose curved path can drag a held object over the floor).
+    straight: bool,
 }
 
 impl Expert {
@@ -145,13 +166,14 @@ impl Expert {
             q: None,
             pad: Vector3::zeros(),
             orientation: UnitQuaternion::identity(),
-            gripper: OPEN,
+            gripper: open(),
             grasp: None,
             grasp_object: Point3::origin(),
             clearance: Clearance::new(robot_model(task.robot), task.objective, task.obstacle),
             failed: Vec::new(),
             lift_start_pad_z: 0.0,
             missed: false,
+            straight: true,
         }
     }
 
@@ -265,17 +287,30 @@ impl Expert {
                 self.phase = Phase::Lift;
                 let rest = self.grasp_object.z;
                 let lift_to = match task.objective {
-                    Objective::Push if self.top_down() => rest + PUSH_LIFT,
-                    // Side grasps hold the wrist low: carry as high as Push allows.
+                    Objective::Push if self.top_down() && !goal_wall => rest + PUSH_LIFT,
+                    // Side grasps hold the wrist low, and round the goal wall the forearm
+                    // passes over the wall's free end: carry as high as Push allows.
                     Objective::Push => PUSH_SIDE_CARRY_Z.max(rest + PUSH_LIFT),
                     _ if goal_wall => OVER_GOAL_WALL_Z,
                     _ if walled => OVER_OBJECT_WALL_Z,
                     _ => CARRY_Z,
                 };
+                // Where nothing has to be cleared on the way to bin 2 or the shelf, a lower
+                // carry if the arm cannot lift the object that high with this grasp (lifting
+                // into an unreachable pose drags the object over the floor instead).
+                let lower_ok = !walled
+                    && !goal_wall
+                    && matches!(task.objective, Objective::PickPlace | Objective::Shelf);
+                let mut heights = vec![lift_to];
+                if lower_ok {
+                    heights.extend(LOWER_CARRIES_Z);
+                }
                 let offset = self.pad - self.grasp_object.coords;
                 self.lift_start_pad_z = self.pad.z;
-                let target = Vector3::new(self.pad.x, self.pad.y, lift_to + offset.z);
-                self.segment(model, target, self.orientation, 1.5);
+                let (x, y, o) = (self.pad.x, self.pad.y, self.orientation);
+                self.first_straight(&heights, |e, z| {
+                    e.segment(model, Vector3::new(x, y, z + offset.z), o, 1.5);
+                });
             }
             Phase::Lift => {
                 // The object did not come up with the gripper: open, back off and try the
@@ -304,10 +339,12 @@ impl Expert {
                         let goal = env.goal();
                         let t = Vector3::new(goal.x + held.x, goal.y + held.y, h);
                         let lanes: &[Option<f64>] = if self.top_down() {
-                            // The box's fingertips pass just over the floor: no clearance
-                            // check, the lanes measured for it.
+                            // The box's fingertips pass just over the floor: straight, no
+                            // clearance check. Past the goal wall (carried high) the first lane
+                            // that keeps clear; the nearer one for arms that do not reach
+                            // the other with the gripper pointing down this low.
                             if goal_wall {
-                                &[Some(AROUND_GOAL_WALL_X)]
+                                &[Some(AROUND_GOAL_WALL_X), Some(NEAR_GOAL_WALL_X)]
                             } else {
                                 &[None]
                             }
@@ -316,16 +353,29 @@ impl Expert {
                         } else {
                             &[None, Some(AROUND_GOAL_WALL_X), Some(PUSH_WIDE_LANE_X)]
                         };
-                        self.first_clear(model, lanes, |e, lane| {
+                        // Past the goal wall the gripper may lean (its wrist towards +y) so
+                        // the wrist and forearm clear the wall's top behind the goal.
+                        let leans: &[f64] = if goal_wall && self.top_down() {
+                            &PUSH_LEANS
+                        } else {
+                            &[0.0]
+                        };
+                        let options: Vec<(Option<f64>, f64)> = leans
+                            .iter()
+                            .flat_map(|&lean| lanes.iter().map(move |&lane| (lane, lean)))
+                            .collect();
+                        self.first_clear(model, &options, |e, (lane, lean)| {
+                            let leaning =
+                                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -lean) * o;
                             if let Some(lane) = lane {
                                 // The object itself must pass inside bin 2's far wall.
                                 let radius = object_geometry(task.object).horizontal_radius;
                                 let lane = lane.min(BIN2_FAR_WALL_X - radius - 0.01) + held.x;
                                 let y = e.pad.y;
                                 e.segment(model, Vector3::new(lane, y, h), o, 1.0);
-                                e.segment(model, Vector3::new(lane, t.y - 0.03, h), o, 2.0);
+                                e.segment(model, Vector3::new(lane, t.y - 0.03, h), leaning, 2.0);
                             }
-                            e.segment(model, t, o, 2.0);
+                            e.segment(model, t, leaning, 2.0);
                         });
                     }
                     Objective::PickPlace if !self.top_down() => {
@@ -357,6 +407,12 @@ impl Expert {
                         let front = SHELF.position[1] - 2.0 * SHELF.y_size - radius - 0.03;
                         let board = SHELF.position[2] + SHELF.z_offset;
                         let z = board - bottom + DROP_GAP + 0.01;
+                        // The gripper turns level on the way: pitched down, its wrist rides
+                        // above the pads and meets the shelf's top block before the object is
+                        // in (the object tilts with it, its far side up, well inside the
+                        // 15.5 cm opening).
+                        let turn = levelling(&o);
+                        let (o, held) = (turn * o, turn * held);
                         let level = Vector3::new(held.x, held.y, 0.0);
                         self.segment(model, Vector3::new(x, front, h) + level, o, 2.0);
                         self.segment(model, Vector3::new(x, front, z) + held, o, 1.5);
@@ -430,7 +486,7 @@ impl Expert {
             }
             Phase::Place => {
                 self.phase = Phase::Release;
-                self.gripper = OPEN;
+                self.gripper = open();
                 self.hold(0.8);
             }
             Phase::Release => {
@@ -496,6 +552,24 @@ impl Expert {
         }
     }
 
+    /// Plans `plan(self, option)` for the first of `options` whose segments all follow their
+    /// straight lines, else for the first option.
+    fn first_straight<T: Copy>(&mut self, options: &[T], plan: impl Fn(&mut Self, T)) {
+        let start = (self.q, self.pad, self.orientation, self.plan.len());
+        for &option in options {
+            self.straight = true;
+            plan(self, option);
+            if self.straight {
+                return;
+            }
+            (self.q, self.pad, self.orientation) = (start.0, start.1, start.2);
+            self.plan.truncate(start.3);
+        }
+        if let Some(&first) = options.first() {
+            plan(self, first);
+        }
+    }
+
     /// The smallest clearance from the arena of the planned actions from `from` on.
     fn plan_clearance(&self, model: &RobotModel, from: usize) -> f64 {
         self.plan
@@ -517,7 +591,8 @@ impl Expert {
 
     /// Plans the approach to `grasp`'s pre-grasp (up to `clear_z`, over, down) and returns the
     /// smallest clearance from the arena along it and along the last stretch into the grasp
-    /// (which is planned only later, from where the object is then).
+    /// (which is planned only later, from where the object is then), less [`UNLIFTABLE`] if
+    /// the gripper cannot then rise straight, less [`UNREACHED`] if a pose is out of reach.
     fn plan_approach(&mut self, model: &RobotModel, grasp: &Grasp, clear_z: f64) -> f64 {
         self.missed = false;
         self.grasp = Some(*grasp);
@@ -540,8 +615,29 @@ impl Expert {
         let at_pre = (self.q, self.pad, self.orientation);
         self.segment(model, grasp.pad, grasp.orientation, 1.5);
         let gap = self.plan_clearance(model, 0);
+        // The first stretch of the lift, not counted in the clearance (the object is lifted
+        // off the floor): a grasp from which the gripper cannot rise straight would drag the
+        // object over the floor.
+        // Not behind the object wall or door, where the approach over the wall decides and a
+        // grasp that needs a joint-space lift still works (measured: Panda/dumbbell/wall/shelf).
+        self.straight = true;
+        let rise = if self.task.objective == Objective::Push {
+            PUSH_LIFT_CHECK
+        } else {
+            LIFT_CHECK
+        };
+        let walled = matches!(
+            self.task.obstacle,
+            Obstacle::ObjectWall | Obstacle::ObjectDoor
+        );
+        if !walled {
+            let lift = grasp.pad + Vector3::z() * rise;
+            self.segment(model, lift, grasp.orientation, 1.0);
+        }
+        let liftable = self.straight;
         self.plan.truncate(planned);
         (self.q, self.pad, self.orientation) = at_pre;
+        let gap = if liftable { gap } else { gap - UNLIFTABLE };
         if self.missed { gap - UNREACHED } else { gap }
     }
 
@@ -621,6 +717,7 @@ impl Expert {
             n = ((n as f64 * fastest / MAX_JOINT_STEP).ceil() as usize).min(limit);
         }
         let q = *line.last().expect("at least one step");
+        self.straight &= all_met;
         if !all_met && let Some(goal) = self.best_solution(model, &q0, pad, orientation) {
             // The straight line runs into a joint limit: move the joints straight instead —
             // unless the line still ends on its goal and the joint-space path comes closer to
@@ -690,6 +787,14 @@ fn shelf_approach(robot: Robot) -> (f64, bool) {
         Robot::Gen3 => (0.0, true),
         _ => (0.08, false),
     }
+}
+
+/// The turn about a horizontal axis that makes the approach axis of a gripper at
+/// `orientation` level.
+fn levelling(orientation: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    let approach = orientation * Vector3::z();
+    let level = Vector3::new(approach.x, approach.y, 0.0);
+    UnitQuaternion::rotation_between(&approach, &level).unwrap_or_else(UnitQuaternion::identity)
 }
 
 /// `orientation` (gripper pointing down, closing along x) turned about the world x axis until
