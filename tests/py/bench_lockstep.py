@@ -94,17 +94,7 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: 
             command.wait_for_subscribers(1, timeout=20)
             observations.wait_for_publishers(timeout=20)
             rewards.wait_for_publishers(timeout=20)
-            # joint_states is published at each reset and step: start an episode to see one (and
-            # again if the sim sent it before its writer matched our reader).
-            for _ in range(5):
-                reply = reset.call({"seed": 0, "use_seed": True}, timeout=10)
-                try:
-                    first = states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
-                    break
-                except TimeoutError:
-                    continue
-            else:
-                raise TimeoutError("no joint_states after 5 resets")
+            _, first = ros_agent.reset_with_joint_states(reset, states, seed=0)
             sampler = RssSampler(suite.pid, rss_every, lambda: done) if rss_every else None
             done = 0
             names = list(first.name[:ARM_JOINTS])

@@ -707,6 +707,22 @@ class ServiceClient:
             out.extend(_valid(batch))
 
 
+def reset_with_joint_states(reset: "ServiceClient", states: "Subscription", seed: int,
+                            attempts: int = 5) -> tuple[Any, Any]:
+    """Reset (`seed`) through `reset` until the step-0 `joint_states` of that episode arrives on
+    `states`; (reply, joint_states). The sim publishes joint_states at a reset, and its writer may
+    match this reader only after that sample went out (each side sees the match on its own)."""
+    for _ in range(attempts):
+        reply = reset.call({"seed": seed, "use_seed": True}, timeout=10)
+        if not reply.success:
+            raise RuntimeError(f"reset refused: {reply.message}")
+        try:
+            return reply, states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
+        except TimeoutError:
+            continue
+    raise TimeoutError(f"no joint_states after {attempts} resets")
+
+
 class Agent:
     """One DDS participant acting as a ROS 2 agent in a namespace.
 

@@ -260,18 +260,7 @@ def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
         observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
         command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
         reset = agent.service_client("reset", "composuite_msgs/srv/Reset", format="fastdds")
-        # The sim's joint_states writer may match our reader only after a reset's step-0
-        # sample went out (each side sees the match on its own): reset until one arrives.
-        for _ in range(5):
-            reply = reset.call({"seed": 1, "use_seed": True}, timeout=10)
-            assert reply.success, reply.message
-            try:
-                first = states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
-                break
-            except TimeoutError:
-                continue
-        else:
-            raise AssertionError("no joint_states after 5 resets")
+        reply, first = ros_agent.reset_with_joint_states(reset, states, seed=1)
         bad = DataWriter(agent.participant, Topic(agent.participant, "rt/mal/joint_command", Garbage),
                          qos=ros_agent.QOS_PROFILES["state"].to_dds())
         time.sleep(0.5)
