@@ -124,6 +124,21 @@ pub enum Phase {
     Done,
 }
 
+/// Where planning stands (the last planned joints, pad and orientation, and the plan's
+/// length): trial plans are rewound to it.
+#[derive(Clone, Copy)]
+struct PlanMark {
+    q: Option<[f64; ARM_DOF]>,
+    pad: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+    len: usize,
+}
+
+/// Whether the object stands behind the object wall or the door (both passed over).
+fn behind_wall(obstacle: Obstacle) -> bool {
+    matches!(obstacle, Obstacle::ObjectWall | Obstacle::ObjectDoor)
+}
+
 /// The scripted expert of one task.
 pub struct Expert {
     task: TaskSpec,
@@ -209,7 +224,7 @@ impl Expert {
         let [x, y, z, w] = obs.object.orientation;
         let object_rotation = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
         let task = self.task;
-        let walled = matches!(task.obstacle, Obstacle::ObjectWall | Obstacle::ObjectDoor);
+        let walled = behind_wall(task.obstacle);
         let goal_wall = task.obstacle == Obstacle::GoalWall;
         let bottom = object_geometry(task.object).bottom_offset;
         match self.phase {
@@ -531,39 +546,53 @@ impl Expert {
         options: &[T],
         plan: impl Fn(&mut Self, T),
     ) {
-        let start = (self.q, self.pad, self.orientation, self.plan.len());
+        let start = self.mark();
         let mut best: Option<(T, f64)> = None;
         for &option in options {
             self.missed = false;
             plan(self, option);
             let gap =
-                self.plan_clearance(model, start.3) - if self.missed { UNREACHED } else { 0.0 };
+                self.plan_clearance(model, start.len) - if self.missed { UNREACHED } else { 0.0 };
             if gap >= MIN_CLEARANCE {
                 return;
             }
             if best.is_none_or(|(_, b)| gap > b) {
                 best = Some((option, gap));
             }
-            (self.q, self.pad, self.orientation) = (start.0, start.1, start.2);
-            self.plan.truncate(start.3);
+            self.rewind(start);
         }
         if let Some((option, _)) = best {
             plan(self, option);
         }
     }
 
+    /// Where planning stands now.
+    fn mark(&self) -> PlanMark {
+        PlanMark {
+            q: self.q,
+            pad: self.pad,
+            orientation: self.orientation,
+            len: self.plan.len(),
+        }
+    }
+
+    /// Drop what was planned after `mark` and continue from there.
+    fn rewind(&mut self, mark: PlanMark) {
+        (self.q, self.pad, self.orientation) = (mark.q, mark.pad, mark.orientation);
+        self.plan.truncate(mark.len);
+    }
+
     /// Plans `plan(self, option)` for the first of `options` whose segments all follow their
     /// straight lines, else for the first option.
     fn first_straight<T: Copy>(&mut self, options: &[T], plan: impl Fn(&mut Self, T)) {
-        let start = (self.q, self.pad, self.orientation, self.plan.len());
+        let start = self.mark();
         for &option in options {
             self.straight = true;
             plan(self, option);
             if self.straight {
                 return;
             }
-            (self.q, self.pad, self.orientation) = (start.0, start.1, start.2);
-            self.plan.truncate(start.3);
+            self.rewind(start);
         }
         if let Some(&first) = options.first() {
             plan(self, first);
@@ -611,8 +640,7 @@ impl Expert {
         if pre.z < clear - 1e-6 {
             self.segment(model, pre, grasp.orientation, 1.0);
         }
-        let planned = self.plan.len();
-        let at_pre = (self.q, self.pad, self.orientation);
+        let at_pre = self.mark();
         self.segment(model, grasp.pad, grasp.orientation, 1.5);
         let gap = self.plan_clearance(model, 0);
         // The first stretch of the lift, not counted in the clearance (the object is lifted
@@ -626,17 +654,12 @@ impl Expert {
         } else {
             LIFT_CHECK
         };
-        let walled = matches!(
-            self.task.obstacle,
-            Obstacle::ObjectWall | Obstacle::ObjectDoor
-        );
-        if !walled {
+        if !behind_wall(self.task.obstacle) {
             let lift = grasp.pad + Vector3::z() * rise;
             self.segment(model, lift, grasp.orientation, 1.0);
         }
         let liftable = self.straight;
-        self.plan.truncate(planned);
-        (self.q, self.pad, self.orientation) = at_pre;
+        self.rewind(at_pre);
         let gap = if liftable { gap } else { gap - UNLIFTABLE };
         if self.missed { gap - UNREACHED } else { gap }
     }
