@@ -128,6 +128,9 @@ fn play(
         let mut reward_stream = std::pin::pin!(rewards.async_stream());
         let mut status_stream = std::pin::pin!(statuses.async_stream());
         let mut seen = Received::default();
+        // The in-process twin, fed the same commands (each reset starts from a fresh copy of
+        // its world, so one serves every episode).
+        let mut shadow = Env::new(task, EnvConfig::default());
         for e in 0..args.episodes {
             let seed = args.seed + e as u64;
             let timeout = if e == 0 {
@@ -136,7 +139,6 @@ fn play(
                 STEP_TIMEOUT
             };
             let reply = call_reset(&reset, seed, timeout, suite).await?;
-            let mut shadow = Env::new(task, EnvConfig::default());
             let first = shadow.reset(seed).map_err(|e| e.to_string())?;
             let mut identical = bits(&reply.observation.flat) == bits(&first.flat());
             let mut expert = Expert::new(task);
