@@ -95,8 +95,8 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: 
             observations.wait_for_publishers(timeout=20)
             rewards.wait_for_publishers(timeout=20)
             _, first = ros_agent.reset_with_joint_states(reset, states, seed=0)
-            sampler = RssSampler(suite.pid, rss_every, lambda: done) if rss_every else None
             done = 0
+            sampler = RssSampler(suite.pid, rss_every, lambda: done) if rss_every else None
             names = list(first.name[:ARM_JOINTS])
             home = list(first.position[:ARM_JOINTS])
             rng = random.Random(7)

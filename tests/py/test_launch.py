@@ -207,16 +207,19 @@ def test_remaps_and_node_name_apply_to_a_running_node():
 
 class BareNodes:
     """Node binaries started on their own (no launcher) in `namespace` of a fresh random domain,
-    with the given ROS arguments; on exit they get SIGINT, and `errs` holds each one's stderr
-    (in the order of `kinds`) for the assertions after the block.
+    with the given ROS arguments (and `per_node[kind]` for that kind only); on exit they get
+    SIGINT, and `errs` holds each one's stderr (in the order of `kinds`) for the assertions
+    after the block.
 
         with BareNodes("/ns", ("task_manager", "sim")) as nodes:
             ... nodes.domain ...
         assert "..." in nodes.errs[0]
     """
 
-    def __init__(self, namespace: str, kinds: tuple[str, ...], *ros_args: str):
+    def __init__(self, namespace: str, kinds: tuple[str, ...], *ros_args: str,
+                 per_node: dict[str, tuple[str, ...]] | None = None):
         self.namespace, self.kinds, self.ros_args = namespace, kinds, ros_args
+        self.per_node = per_node or {}
         self.domain = random.randint(1, 200)
         self.procs: list[subprocess.Popen] = []
         self.errs: list[str] = []
@@ -224,7 +227,8 @@ class BareNodes:
     def __enter__(self) -> "BareNodes":
         env = dict(os.environ, ROS_DOMAIN_ID=str(self.domain))
         self.procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r",
-                                        f"__ns:={self.namespace}", *self.ros_args],
+                                        f"__ns:={self.namespace}", *self.ros_args,
+                                        *self.per_node.get(kind, ())],
                                        env=env, stderr=subprocess.PIPE, text=True)
                       for kind in self.kinds]
         return self
@@ -326,24 +330,14 @@ def test_demo_plays_the_expert_over_ros_identically_to_in_process():
 
 
 def test_robot_description_and_tf_static_place_the_arm_for_rviz():
-    domain = random.randint(1, 200)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-    procs = [subprocess.Popen([str(bin_dir() / f"{kind}_node"), "--ros-args", "-r", "__ns:=/viz",
-                               *(["-p", "task:=Panda/box/no_obstacle/push"] if kind == "task_manager" else [])],
-                              env=env, stderr=subprocess.PIPE, text=True)
-             for kind in ("task_manager", "sim")]
-    try:
-        with ros_agent.Agent(namespace="/viz", domain_id=domain) as agent:
-            # Late joiners: both are latched (transient local).
-            statics = agent.subscribe("tf_static", "tf2_msgs/msg/TFMessage", qos="latched")
-            urdf = agent.subscribe("robot_description", "std_msgs/msg/String", qos="latched")
-            transform = statics.wait_for(None, timeout=20).transforms[0]
-            description = urdf.wait_for(None, timeout=20).data
-    finally:
-        for p in procs:
-            p.send_signal(signal.SIGINT)
-        errs = [p.communicate(timeout=10)[1] for p in procs]
-    assert all(p.returncode == 0 for p in procs), errs
+    with BareNodes("/viz", ("task_manager", "sim"),
+                   per_node={"task_manager": ("-p", "task:=Panda/box/no_obstacle/push")}) as nodes, \
+            ros_agent.Agent(namespace="/viz", domain_id=nodes.domain) as agent:
+        # Late joiners: both are latched (transient local).
+        statics = agent.subscribe("tf_static", "tf2_msgs/msg/TFMessage", qos="latched")
+        urdf = agent.subscribe("robot_description", "std_msgs/msg/String", qos="latched")
+        transform = statics.wait_for(None, timeout=20).transforms[0]
+        description = urdf.wait_for(None, timeout=20).data
     # Panda's URDF root link, at CompoSuite's robot base position (facts: -0.5, -0.1, 0.912).
     assert transform.header.frame_id == "world" and transform.child_frame_id == "link0"
     t = transform.transform.translation
