@@ -39,3 +39,31 @@ fn the_expert_solves_a_subset_of_tasks() {
     }
     assert!(failures.is_empty(), "failed: {failures:#?}");
 }
+
+/// Pushing a side-grasped object past the goal wall: the expert sets it down just past the
+/// wall's free end, grasps it again from the robot's side and carries it to the goal
+/// (a single side grasp would hold the wrist across the wall's line, below its top).
+#[test]
+fn the_expert_regrasps_past_the_goal_wall() {
+    use composuite_core::env::{Env, EnvConfig};
+    use composuite_core::expert::{Expert, Phase};
+
+    let task: TaskSpec = "IIWA/dumbbell/goal_wall/push".parse().unwrap();
+    let mut env = Env::new(task, EnvConfig::default());
+    env.reset(0).unwrap();
+    let mut expert = Expert::new(task);
+    let (mut approaches, mut last, mut success) = (0, Phase::Start, false);
+    while env.ended().is_none() {
+        let action = expert.act(&env);
+        success |= env.step(&action).unwrap().info.success;
+        if expert.phase() == Phase::Approach && last != Phase::Approach {
+            approaches += 1;
+        }
+        last = expert.phase();
+    }
+    assert_eq!(
+        approaches, 2,
+        "one grasp to set the object down, one to finish"
+    );
+    assert!(success, "the object never reached the goal");
+}

@@ -19,8 +19,14 @@ use super::motion::reach_cost;
 pub(super) fn open() -> f64 {
     pad_gap(FINGER_OPEN)
 }
-/// Gripper opening (m) commanded to grasp (the 20 N finger servos then hold the object).
-pub(super) const CLOSED: f64 = 0.0;
+/// Gripper opening (m) commanded to grasp: the pads' gap with the fingers at their closed
+/// limit (0.0141; the finger servos then squeeze the object with their force limit).
+pub(super) fn closed(model: &RobotModel) -> f64 {
+    let (closed, _) = model.joints[ARM_DOF]
+        .limits
+        .expect("finger joints are limited");
+    pad_gap(closed)
+}
 
 /// The dumbbell's side grasp: the approach axis leans this far below horizontal (rad), so the
 /// wrist behind the gripper stays above bin 1's floor and rims while the gripper base still
@@ -88,6 +94,8 @@ pub(super) struct GraspInput<'a> {
     pub rotation: UnitQuaternion<f64>,
     /// Lean of a top-down approach towards the robot (rad; 0 = vertical).
     pub tilt: f64,
+    /// Which way side grasps should point.
+    pub headings: Headings,
 }
 
 /// The grasps of the object in `input`, the planner's preferred one first.
@@ -103,27 +111,55 @@ pub(super) fn grasp_candidates(input: &GraspInput) -> Vec<Grasp> {
             };
             vec![near, far]
         }
-        Object::Dumbbell => side_grasps(|h| dumbbell_grasps_towards(input.position, h)),
-        Object::Plate => side_grasps(|h| plate_grasps_towards(input.position, h)),
+        Object::Dumbbell => side_grasps(input.headings, |h| {
+            dumbbell_grasps_towards(input.position, h)
+        }),
+        Object::Plate => side_grasps(input.headings, |h| plate_grasps_towards(input.position, h)),
     }
 }
 
-/// The horizontal directions a side grasp may point in, best first: +y (towards bin 2, so
-/// the object goes into the shelf without turning), then turning towards +x (away from the
-/// robot), which arms with a shorter reach need for objects on bin 1's far side.
-fn side_headings() -> [Vector3<f64>; 4] {
-    let d = std::f64::consts::FRAC_1_SQRT_2;
-    [
-        Vector3::y(),
-        Vector3::new(d, d, 0.0),
-        Vector3::x(),
-        Vector3::new(d, -d, 0.0),
-    ]
+/// Which way side grasps should point, in the planner's order of preference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Headings {
+    /// +y first (towards bin 2, so the object goes into the shelf without turning), then
+    /// turning towards +x (away from the robot), which arms with a shorter reach need for
+    /// objects on bin 1's far side.
+    TowardsBin2,
+    /// For grasping an object set down just past the goal wall's free end again: the wrist
+    /// on the far side of the wall's line (+x−y first: wrist towards the robot and bin 2's
+    /// middle), so carrying the object on to the goal keeps the wrist off the wall. The
+    /// carry's clearance decides among them.
+    Regrasp,
+}
+
+impl Headings {
+    /// The horizontal directions a side grasp may point in, best first.
+    fn directions(self) -> Vec<Vector3<f64>> {
+        let d = std::f64::consts::FRAC_1_SQRT_2;
+        match self {
+            Headings::TowardsBin2 => vec![
+                Vector3::y(),
+                Vector3::new(d, d, 0.0),
+                Vector3::x(),
+                Vector3::new(d, -d, 0.0),
+            ],
+            Headings::Regrasp => vec![
+                Vector3::new(d, -d, 0.0),
+                -Vector3::y(),
+                Vector3::x(),
+                Vector3::new(d, d, 0.0),
+            ],
+        }
+    }
 }
 
 /// The grasps each heading allows, best heading first.
-fn side_grasps(grasps_at: impl Fn(Vector3<f64>) -> Vec<Grasp>) -> Vec<Grasp> {
-    side_headings().into_iter().flat_map(grasps_at).collect()
+fn side_grasps(headings: Headings, grasps_at: impl Fn(Vector3<f64>) -> Vec<Grasp>) -> Vec<Grasp> {
+    headings
+        .directions()
+        .into_iter()
+        .flat_map(grasps_at)
+        .collect()
 }
 
 /// The dumbbell by its bar, from the side: the approach axis leaning down, the fingers

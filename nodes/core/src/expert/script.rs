@@ -13,7 +13,7 @@ use crate::kinematics::link_pose;
 use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel, robot_model};
 
 use super::clearance::{Clearance, MIN_CLEARANCE, best_clear};
-use super::grasp::{CLOSED, Grasp, GraspInput, grasp_candidates, open};
+use super::grasp::{Grasp, GraspInput, Headings, closed, grasp_candidates, open};
 use super::motion::{PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_solutions, smoothstep, steps};
 
 /// Pad-centre height (m) that clears the object wall and door (tops at z 1.07).
@@ -34,6 +34,19 @@ const PUSH_LIFT_CHECK: f64 = 0.03;
 /// What a grasp that cannot be lifted straight counts as lost clearance (m): less than an
 /// unreached one.
 const UNLIFTABLE: f64 = 0.5;
+/// Where a side-grasped object is set down past the goal wall's free end before it is
+/// grasped again from the robot's side and carried to the goal (Push; y, m): far enough past
+/// the wall's line (y −0.01) that the second grasp's wrist, behind the object towards the
+/// robot, keeps clear of it, yet within the arms' reach with the gripper pointing +y. The x
+/// is the lane round the wall's end.
+const REGRASP_SPOT_Y: f64 = 0.0;
+/// x (m) of that spot: just past the wall's free end (x 0.11) with the plate's rim clear of
+/// it, and far enough from bin 2's far wall (x 0.29) for the fingers of the second grasp.
+const REGRASP_SPOT_X: f64 = 0.2;
+/// The second grasp's approach, grasp and lift take this fraction of the usual time.
+const REGRASP_PACE: f64 = 0.6;
+/// Height (m) above its resting height at which a set-down object is let go.
+const SET_DOWN_GAP: f64 = 0.005;
 /// Grasps tried again after one that did not lift the object.
 const MAX_RETRIES: usize = 2;
 /// Object-centre height (m) for a plain lift and carry.
@@ -157,6 +170,8 @@ pub struct Expert {
     grasp: Option<Grasp>,
     /// Where the object was when the grasp was planned (m).
     grasp_object: Point3<f64>,
+    /// The task's goal (the object's target position, m).
+    goal: Point3<f64>,
     /// The arm's distance to the arena, for choosing among IK solutions.
     clearance: Clearance,
     /// Orientations of grasps that did not lift the object (not tried again).
@@ -169,6 +184,12 @@ pub struct Expert {
     /// Whether every segment planned since this was last set follows its straight line (none
     /// needed a joint-space move, whose curved path can drag a held object over the floor).
     straight: bool,
+    /// Whether the current grasp ends by setting the object down past the goal wall, to be
+    /// grasped again (a side grasp that carries the object to the goal would hold the wrist
+    /// across the wall's line, below its top).
+    set_down: bool,
+    /// Whether the object has been set down and grasped again.
+    regrasped: bool,
 }
 
 impl Expert {
@@ -184,11 +205,14 @@ impl Expert {
             gripper: open(),
             grasp: None,
             grasp_object: Point3::origin(),
+            goal: Point3::origin(),
             clearance: Clearance::new(robot_model(task.robot), task.objective, task.obstacle),
             failed: Vec::new(),
             lift_start_pad_z: 0.0,
             missed: false,
             straight: true,
+            set_down: false,
+            regrasped: false,
         }
     }
 
@@ -209,6 +233,12 @@ impl Expert {
                 gripper: Some((self.gripper, 0.0)),
             },
         }
+    }
+
+    /// How long the approach, grasp and lift take, as a fraction of the usual: grasping a
+    /// set-down object again must fit in what is left of the episode.
+    fn pace(&self) -> f64 {
+        if self.regrasped { REGRASP_PACE } else { 1.0 }
     }
 
     /// Whether the grasp is a top-down one.
@@ -252,6 +282,11 @@ impl Expert {
                     position: object,
                     rotation: object_rotation,
                     tilt,
+                    headings: if self.regrasped {
+                        Headings::Regrasp
+                    } else {
+                        Headings::TowardsBin2
+                    },
                 });
                 // Grasps that already failed go last.
                 let (mut candidates, tried): (Vec<Grasp>, Vec<Grasp>) = candidates
@@ -259,8 +294,12 @@ impl Expert {
                     .partition(|g| self.failed.iter().all(|f| f.angle_to(&g.orientation) > 0.1));
                 candidates.extend(tried);
                 self.grasp_object = object;
+                self.goal = env.goal();
                 let clear_z = if walled {
                     OVER_OBJECT_WALL_Z
+                } else if self.regrasped {
+                    // Turning to the new grasp over the goal wall, not beside it.
+                    OVER_GOAL_WALL_Z
                 } else {
                     object.z + 0.12
                 };
@@ -291,11 +330,11 @@ impl Expert {
                 // The object may have been nudged since the plan: keep the grasp's offset.
                 let pad = grasp.pad + (object - self.grasp_object);
                 self.grasp_object = object;
-                self.segment(model, pad, self.orientation, 1.5);
+                self.segment(model, pad, self.orientation, 1.5 * self.pace());
             }
             Phase::Descend => {
                 self.phase = Phase::Close;
-                self.gripper = CLOSED;
+                self.gripper = closed(model);
                 self.hold(0.6);
             }
             Phase::Close => {
@@ -323,8 +362,9 @@ impl Expert {
                 let offset = self.pad - self.grasp_object.coords;
                 self.lift_start_pad_z = self.pad.z;
                 let (x, y, o) = (self.pad.x, self.pad.y, self.orientation);
+                let seconds = 1.5 * self.pace();
                 self.first_straight(&heights, |e, z| {
-                    e.segment(model, Vector3::new(x, y, z + offset.z), o, 1.5);
+                    e.segment(model, Vector3::new(x, y, z + offset.z), o, seconds);
                 });
             }
             Phase::Lift => {
@@ -348,6 +388,18 @@ impl Expert {
                 // The pads relative to the object, so targets can name where the object goes.
                 let held = self.pad - object.coords;
                 match task.objective {
+                    Objective::Push if goal_wall && !self.top_down() && !self.regrasped => {
+                        // Round the goal wall's free end to a spot past its line, to be set
+                        // down there and grasped again from the robot's side.
+                        self.set_down = true;
+                        let radius = object_geometry(task.object).horizontal_radius;
+                        let lane = AROUND_GOAL_WALL_X.min(BIN2_FAR_WALL_X - radius - 0.01);
+                        let lane = lane + held.x;
+                        let spot = Vector3::new(REGRASP_SPOT_X, REGRASP_SPOT_Y, 0.0) + held;
+                        self.segment(model, Vector3::new(lane, self.pad.y, h), o, 0.8);
+                        self.segment(model, Vector3::new(lane, spot.y, h), o, 1.5);
+                        self.segment(model, Vector3::new(spot.x, spot.y, h), o, 0.8);
+                    }
                     Objective::Push => {
                         // Straight to the goal, or round a lane at x (the goal wall's free
                         // end; bin 2's near wall for a low wrist): the first that keeps clear.
@@ -363,8 +415,11 @@ impl Expert {
                             } else {
                                 &[None]
                             }
-                        } else if goal_wall {
+                        } else if goal_wall && !self.regrasped {
                             &[Some(AROUND_GOAL_WALL_X), Some(PUSH_WIDE_LANE_X)]
+                        } else if goal_wall {
+                            // Grasped again past the wall: straight on.
+                            &[None]
                         } else {
                             &[None, Some(AROUND_GOAL_WALL_X), Some(PUSH_WIDE_LANE_X)]
                         };
@@ -473,6 +528,12 @@ impl Expert {
                 self.phase = Phase::Place;
                 let held = self.pad - object.coords;
                 match task.objective {
+                    _ if self.set_down => {
+                        // Down to just above where it rested.
+                        let z = self.grasp_object.z + SET_DOWN_GAP + held.z;
+                        let t = Vector3::new(self.pad.x, self.pad.y, z);
+                        self.segment(model, t, self.orientation, 1.0);
+                    }
                     Objective::Shelf if !self.top_down() => {
                         let t = Vector3::new(self.pad.x, SHELF_SIDE_TARGET_Y + held.y, self.pad.z);
                         self.segment(model, t, self.orientation, 2.0);
@@ -502,11 +563,21 @@ impl Expert {
             Phase::Place => {
                 self.phase = Phase::Release;
                 self.gripper = open();
-                self.hold(0.8);
+                self.hold(if self.set_down { 0.4 } else { 0.8 });
             }
             Phase::Release => {
                 self.phase = Phase::Retreat;
                 let back = self.grasp.map_or(Vector3::zeros(), |g| -g.approach);
+                if self.set_down {
+                    // Back out of the grasp and up, then grasp the object again.
+                    let t = self.pad + back * 0.07 + Vector3::z() * 0.04;
+                    self.segment(model, t, self.orientation, 1.0);
+                    self.set_down = false;
+                    self.regrasped = true;
+                    self.failed.clear();
+                    self.phase = Phase::Start;
+                    return;
+                }
                 match task.objective {
                     Objective::TrashCan => {
                         let t = Vector3::new(self.pad.x, self.pad.y - 0.05, self.pad.z + 0.12);
@@ -630,18 +701,18 @@ impl Expert {
         let clear = clear_z.max(pre.z);
         let mut rise = self.pad;
         rise.z = rise.z.max(clear);
-        self.segment(model, rise, grasp.orientation, 1.0);
+        self.segment(model, rise, grasp.orientation, self.pace());
         self.segment(
             model,
             Vector3::new(pre.x, pre.y, clear),
             grasp.orientation,
-            1.5,
+            1.5 * self.pace(),
         );
         if pre.z < clear - 1e-6 {
-            self.segment(model, pre, grasp.orientation, 1.0);
+            self.segment(model, pre, grasp.orientation, self.pace());
         }
         let at_pre = self.mark();
-        self.segment(model, grasp.pad, grasp.orientation, 1.5);
+        self.segment(model, grasp.pad, grasp.orientation, 1.5 * self.pace());
         let gap = self.plan_clearance(model, 0);
         // The first stretch of the lift, not counted in the clearance (the object is lifted
         // off the floor): a grasp from which the gripper cannot rise straight would drag the
@@ -659,6 +730,17 @@ impl Expert {
             self.segment(model, lift, grasp.orientation, 1.0);
         }
         let liftable = self.straight;
+        // Grasping a set-down object again: the carry on to the goal must keep clear too.
+        let gap = if self.regrasped && self.task.objective == Objective::Push {
+            let carry = (self.goal - self.grasp_object).xy().push(0.0);
+            let up = Vector3::z() * (PUSH_SIDE_CARRY_Z - self.grasp_object.z).max(0.0);
+            let from = self.plan.len();
+            self.segment(model, grasp.pad + up, grasp.orientation, 1.0);
+            self.segment(model, grasp.pad + up + carry, grasp.orientation, 2.0);
+            gap.min(self.plan_clearance(model, from))
+        } else {
+            gap
+        };
         self.rewind(at_pre);
         let gap = if liftable { gap } else { gap - UNLIFTABLE };
         if self.missed { gap - UNREACHED } else { gap }

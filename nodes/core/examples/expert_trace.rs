@@ -1,0 +1,46 @@
+//! Follows one episode of the scripted expert step by step: phase, object, grip site.
+//!
+//! `cargo run --release -p composuite_core --example expert_trace -- IIWA/plate/goal_wall/push 0 [EVERY]`
+
+use composuite_core::TaskSpec;
+use composuite_core::env::{Env, EnvConfig};
+use composuite_core::expert::Expert;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let usage = "usage: expert_trace ROBOT/OBJECT/OBSTACLE/OBJECTIVE SEED [EVERY]";
+    let task: TaskSpec = args.next().expect(usage).parse().expect("a task name");
+    let seed: u64 = args.next().map_or(0, |s| s.parse().expect("a seed"));
+    let every: u32 = args
+        .next()
+        .map_or(5, |s| s.parse().expect("steps between lines"));
+    let mut env = Env::new(task, EnvConfig::default());
+    env.reset(seed).expect("reset");
+    let mut expert = Expert::new(task);
+    let mut last_phase = None;
+    while env.ended().is_none() {
+        let action = expert.act(&env);
+        let step = env.step(&action).expect("step");
+        let obs = env.observation();
+        let o = obs.object.position;
+        let g = env.world().grip_site_pose().translation.vector;
+        let phase = expert.phase();
+        if last_phase != Some(phase) || env.steps().is_multiple_of(every) || step.info.success {
+            println!(
+                "{:4} {:10} obj ({:+.3} {:+.3} {:+.3}) grip ({:+.3} {:+.3} {:+.3}) r {:.3}{}",
+                env.steps(),
+                format!("{phase:?}"),
+                o[0],
+                o[1],
+                o[2],
+                g.x,
+                g.y,
+                g.z,
+                step.reward,
+                if step.info.success { " SUCCESS" } else { "" }
+            );
+        }
+        last_phase = Some(phase);
+    }
+    println!("ended {:?} return {:.1}", env.ended(), env.episode_return());
+}
