@@ -23,11 +23,19 @@ fn main() {
         let step = env.step(&action).expect("step");
         let obs = env.observation();
         let o = obs.object.position;
+        let [qx, qy, qz, qw] = obs.object.orientation;
+        let rotation =
+            nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(qw, qx, qy, qz));
+        // The object's tilt: the angle between its z axis and the world's.
+        let tilt = (rotation * nalgebra::Vector3::z())
+            .z
+            .clamp(-1.0, 1.0)
+            .acos();
         let g = env.world().grip_site_pose().translation.vector;
         let phase = expert.phase();
         if last_phase != Some(phase) || env.steps().is_multiple_of(every) || step.info.success {
             println!(
-                "{:4} {:10} obj ({:+.3} {:+.3} {:+.3}) grip ({:+.3} {:+.3} {:+.3}) r {:.3}{}",
+                "{:4} {:10} obj ({:+.3} {:+.3} {:+.3}) grip ({:+.3} {:+.3} {:+.3}) r {:.3} tilt {:.3}{}",
                 env.steps(),
                 format!("{phase:?}"),
                 o[0],
@@ -37,6 +45,7 @@ fn main() {
                 g.y,
                 g.z,
                 step.reward,
+                tilt,
                 if step.info.success { " SUCCESS" } else { "" }
             );
         }

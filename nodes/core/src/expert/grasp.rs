@@ -130,6 +130,10 @@ pub(super) enum Headings {
     /// middle), so carrying the object on to the goal keeps the wrist off the wall. The
     /// carry's clearance decides among them.
     Regrasp,
+    /// −y first (the wrist on bin 2's side of the object, past the end of an object wall or
+    /// door between robot and object), then as [`Headings::TowardsBin2`]: for carrying an
+    /// object along bin 1 behind the wall, to be grasped again further on.
+    AlongBin1,
 }
 
 impl Headings {
@@ -143,6 +147,11 @@ impl Headings {
                 Vector3::x(),
                 Vector3::new(d, -d, 0.0),
             ],
+            Headings::AlongBin1 => {
+                let mut all = vec![-Vector3::y()];
+                all.extend(Headings::TowardsBin2.directions());
+                all
+            }
             Headings::Regrasp => vec![
                 Vector3::new(d, -d, 0.0),
                 -Vector3::y(),

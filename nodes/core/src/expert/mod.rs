@@ -39,6 +39,7 @@
 mod clearance;
 mod grasp;
 mod motion;
+mod reach;
 mod script;
 
 pub use script::{Expert, Phase};
