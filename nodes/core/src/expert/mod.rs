@@ -34,7 +34,9 @@
 //! door) or over / around (goal wall). Pushing around the goal wall, a top-grasped object is
 //! carried as high as Push allows and the gripper may lean (wrist towards +y) so the forearm
 //! clears the wall's free end. A side-grasped object is turned level in front of the shelf,
-//! so the wrist behind the gripper passes under the shelf's top block.
+//! so the wrist behind the gripper passes under the shelf's top block. The lane in front of
+//! the shelf and a turn of the gripper about the vertical (swinging the wrist and forearm
+//! away from the walls) are chosen by the arm's clearance along the way in, slide included.
 
 mod clearance;
 mod grasp;

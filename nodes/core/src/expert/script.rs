@@ -92,12 +92,26 @@ const SHELF_INSERT_DEPTH: f64 = 0.05;
 /// Where a side-grasped object's origin ends in the shelf (y, m): inside the 0.18…0.33 band
 /// with the plate's far rim short of the back panel (y 0.32).
 const SHELF_SIDE_TARGET_Y: f64 = 0.25;
-/// x (m) of the lane into the shelf when the goal wall stands at x −0.10…0.11: past the
-/// wall's free end, so the forearm crosses the wall's line beyond it.
-const SHELF_LANE_PAST_GOAL_WALL_X: f64 = 0.17;
+/// Clearance (m) below which a top-grasped object's other ways into the shelf are tried.
+const SHELF_TOP_OTHERS_BELOW: f64 = -0.06;
+/// How far (m) the pads may end from a planned pose in front of the shelf for the way in
+/// to count as reachable.
+const SHELF_REACH_ERROR: f64 = 0.03;
+/// The same for the slide into the shelf (m): the object's origin still ends past y 0.2.
+const SHELF_SLIDE_SHORT: f64 = 0.05;
 /// Lanes into the shelf for the box when the goal wall stands at x −0.10…0.11, best first
 /// (the opening spans x −0.1…0.3).
 const SHELF_LANES_PAST_GOAL_WALL_X: [f64; 3] = [0.17, 0.22, 0.26];
+/// Lanes (the object's x, m) in front of the shelf, best first: its middle, then towards its
+/// far end, then near its x −0.1 end.
+const SHELF_LANES_X: [f64; 4] = [0.1, 0.17, 0.24, 0.03];
+/// The same for a side-grasped object past the goal wall: past the wall's free end first.
+const SHELF_SIDE_LANES_PAST_GOAL_WALL_X: [f64; 5] = [0.17, 0.22, 0.26, 0.1, 0.03];
+/// Turns (rad) of the gripper about the vertical in front of the shelf, best first: positive
+/// swings the wrist towards +x (past the goal wall's free end, away from the object wall's
+/// and door's posts at x 0.009), negative towards −x (the forearm then crosses the goal
+/// wall's line beyond its x −0.10 end).
+const SHELF_YAWS: [f64; 5] = [0.0, 0.35, 0.7, -0.35, -0.7];
 /// Lower object-centre heights (m) to carry at where [`CARRY_Z`] is out of reach and nothing
 /// needs clearing but bin 2's walls (tops at z 0.90).
 const LOWER_CARRIES_Z: [f64; 3] = [1.0, 0.96, 0.93];
@@ -506,26 +520,7 @@ impl Expert {
                         self.segment(model, t, o, 2.0);
                     }
                     Objective::Shelf if !self.top_down() => {
-                        // In front of the shelf with the object clear of its front (y 0.14),
-                        // then down to the opening's height.
-                        let x = if goal_wall {
-                            SHELF_LANE_PAST_GOAL_WALL_X
-                        } else {
-                            SHELF.position[0]
-                        };
-                        let radius = object_geometry(task.object).horizontal_radius;
-                        let front = SHELF.position[1] - 2.0 * SHELF.y_size - radius - 0.03;
-                        let board = SHELF.position[2] + SHELF.z_offset;
-                        let z = board - bottom + DROP_GAP + 0.01;
-                        // The gripper turns level on the way: pitched down, its wrist rides
-                        // above the pads and meets the shelf's top block before the object is
-                        // in (the object tilts with it, its far side up, well inside the
-                        // 15.5 cm opening).
-                        let turn = levelling(&o);
-                        let (o, held) = (turn * o, turn * held);
-                        let level = Vector3::new(held.x, held.y, 0.0);
-                        self.segment(model, Vector3::new(x, front, h) + level, o, 2.0);
-                        self.segment(model, Vector3::new(x, front, z) + held, o, 1.5);
+                        self.shelf_side(model, h, held, bottom, goal_wall);
                     }
                     Objective::Shelf => {
                         // In front of the shelf, down to the opening's height, turned to it and
@@ -534,15 +529,15 @@ impl Expert {
                         // sideways gripper crosses the wall's line below its top).
                         let z = SHELF.position[2] + SHELF.z_offset + SHELF_INSERT_HEIGHT;
                         let (front_y, turn_high) = shelf_approach(task.robot);
-                        let lanes: &[f64] = if goal_wall {
-                            &SHELF_LANES_PAST_GOAL_WALL_X
-                        } else {
-                            &[SHELF.position[0]]
-                        };
-                        self.first_clear(model, lanes, |e, x| {
+                        let options = shelf_top_options(goal_wall);
+                        let plan = |e: &mut Self, (x, yaw): (f64, f64)| {
+                            let sideways = |o: &UnitQuaternion<f64>| {
+                                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw)
+                                    * turned_to_shelf(o)
+                            };
                             e.segment(model, Vector3::new(x, front_y, h), o, 2.0);
                             let o = if turn_high {
-                                let sideways = turned_to_shelf(&o);
+                                let sideways = sideways(&o);
                                 e.segment(model, Vector3::new(x, front_y, h), sideways, 2.0);
                                 sideways
                             } else {
@@ -550,12 +545,29 @@ impl Expert {
                             };
                             e.segment(model, Vector3::new(x, front_y, z), o, 1.5);
                             if !turn_high {
-                                e.segment(model, e.pad, turned_to_shelf(&o), 2.0);
+                                e.segment(model, e.pad, sideways(&o), 2.0);
                             }
+                            let mut reached = e.reached(model) < SHELF_REACH_ERROR;
                             let inside = SHELF.position[1] - SHELF.y_size + SHELF_INSERT_DEPTH;
                             let t = Vector3::new(e.pad.x, inside, e.pad.z);
                             e.segment(model, t, e.orientation, 2.0);
-                        });
+                            reached &= e.reached(model) < SHELF_SLIDE_SHORT;
+                            // Not only for the plate: an option whose poses are out of reach
+                            // goes after every reachable one.
+                            e.missed |= !reached && !goal_wall;
+                        };
+                        // The first option unless the arm would run well into the arena
+                        // along it: the model's near misses mostly work, and the other
+                        // options then did worse (Jaco/box/object_wall 1 → 0 over 3 seeds).
+                        // Past the goal wall, the first lane that keeps clear.
+                        let start = self.mark();
+                        self.missed = false;
+                        plan(self, options[0]);
+                        let gap = self.plan_clearance(model, start.len);
+                        if goal_wall || self.missed || gap < SHELF_TOP_OTHERS_BELOW {
+                            self.rewind(start);
+                            self.first_clear(model, &options, plan);
+                        }
                     }
                     Objective::TrashCan => {
                         let [cx, cy, _] = TRASH_CAN.position;
@@ -648,6 +660,89 @@ impl Expert {
             }
             Phase::Retreat | Phase::Done => self.phase = Phase::Done,
         }
+    }
+
+    /// Shelf, side grasp: in front of the shelf on the first (lane, yaw) of
+    /// [`shelf_side_options`] along which the arm — including the slide in, planned only
+    /// later from where the object then is — keeps clear of the arena and reaches its poses,
+    /// else the one coming closest.
+    fn shelf_side(
+        &mut self,
+        model: &RobotModel,
+        h: f64,
+        held: Vector3<f64>,
+        bottom: f64,
+        goal_wall: bool,
+    ) {
+        let start = self.mark();
+        let options = shelf_side_options(goal_wall);
+        let mut best: Option<((f64, f64), f64)> = None;
+        for &option in &options {
+            let gap = self.shelf_front(model, h, held, bottom, option, true);
+            if gap >= MIN_CLEARANCE {
+                return;
+            }
+            if best.is_none_or(|(_, b)| gap > b) {
+                best = Some((option, gap));
+            }
+            self.rewind(start);
+        }
+        if let Some((option, _)) = best {
+            self.shelf_front(model, h, held, bottom, option, false);
+        }
+    }
+
+    /// Plans the carry to in front of the shelf with the object clear of its front (y 0.14),
+    /// the object at x on the lane, the gripper turned by `yaw` about the vertical (see
+    /// [`SHELF_YAWS`]), then down to the opening's height. With `trial` also the slide in,
+    /// rewound after its clearance is counted; returns the plan's smallest clearance, less
+    /// [`UNREACHED`] if the lowered pose or the slide's end is out of reach.
+    fn shelf_front(
+        &mut self,
+        model: &RobotModel,
+        h: f64,
+        held: Vector3<f64>,
+        bottom: f64,
+        (x, yaw): (f64, f64),
+        trial: bool,
+    ) -> f64 {
+        let from = self.plan.len();
+        let o = self.orientation;
+        let radius = object_geometry(self.task.object).horizontal_radius;
+        let front = SHELF.position[1] - 2.0 * SHELF.y_size - radius - 0.03;
+        let board = SHELF.position[2] + SHELF.z_offset;
+        let z = board - bottom + DROP_GAP + 0.01;
+        // The gripper turns level on the way: pitched down, its wrist rides
+        // above the pads and meets the shelf's top block before the object is
+        // in (the object tilts with it, its far side up, well inside the
+        // 15.5 cm opening).
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * levelling(&o);
+        let (o, held) = (turn * o, turn * held);
+        let level = Vector3::new(held.x, held.y, 0.0);
+        self.segment(model, Vector3::new(x, front, h) + level, o, 2.0);
+        // (Whether the pose above is met matters less: the arm gets there on the way down.)
+        self.segment(model, Vector3::new(x, front, z) + held, o, 1.5);
+        let mut reached = self.reached(model) < SHELF_REACH_ERROR;
+        if trial {
+            let at = self.mark();
+            let t = Vector3::new(x, SHELF_SIDE_TARGET_Y, z) + held;
+            self.segment(model, t, o, 2.0);
+            // A slide in that ends a few cm short still puts the object in.
+            reached &= self.reached(model) < SHELF_SLIDE_SHORT;
+            let gap = self.plan_clearance(model, from);
+            self.rewind(at);
+            if reached { gap } else { gap - UNREACHED }
+        } else {
+            0.0
+        }
+    }
+
+    /// How far (m) the last planned joints put the pads from where they were planned to be.
+    fn reached(&self, model: &RobotModel) -> f64 {
+        let q = self.q.expect("planned");
+        let grip = link_pose(model, &q, GRIP_SITE_LINK).expect("grip site link");
+        let pad = grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE);
+        (pad.coords - self.pad).norm()
     }
 
     /// Keeps the last target for `seconds`, with the current gripper command.
@@ -941,6 +1036,30 @@ fn joint_path(q0: &[f64; ARM_DOF], goal: &[f64; ARM_DOF], n: usize) -> Vec<[f64;
             std::array::from_fn(|j| q0[j] + (goal[j] - q0[j]) * s)
         })
         .collect()
+}
+
+/// The (lane x, yaw) options of a side-grasped object's way into the shelf, best first: each
+/// lane with each of [`SHELF_YAWS`].
+fn shelf_side_options(goal_wall: bool) -> Vec<(f64, f64)> {
+    let lanes: &[f64] = if goal_wall {
+        &SHELF_SIDE_LANES_PAST_GOAL_WALL_X
+    } else {
+        &SHELF_LANES_X
+    };
+    lanes
+        .iter()
+        .flat_map(|&x| SHELF_YAWS.iter().map(move |&w| (x, w)))
+        .collect()
+}
+
+/// The (lane x, yaw) options of a top-grasped object's way into the shelf, best first (see
+/// [`shelf_side_options`]); the first is the lane used before yaws were tried.
+fn shelf_top_options(goal_wall: bool) -> Vec<(f64, f64)> {
+    if goal_wall {
+        // Yaws gained nothing past the goal wall: the forearm meets the wall whichever way.
+        return SHELF_LANES_PAST_GOAL_WALL_X.map(|x| (x, 0.0)).to_vec();
+    }
+    shelf_side_options(false)
 }
 
 /// Where the box waits in front of the shelf (y, m; the opening starts at y 0.14) and whether
