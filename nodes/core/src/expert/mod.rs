@@ -37,6 +37,15 @@
 //! so the wrist behind the gripper passes under the shelf's top block. The lane in front of
 //! the shelf and a turn of the gripper about the vertical (swinging the wrist and forearm
 //! away from the walls) are chosen by the arm's clearance along the way in, slide included.
+//!
+//! Pushing a side-grasped object past the goal wall or from behind the object wall takes two
+//! grasps: no single heading keeps the wrist (10–20 cm behind the pads, below the walls' tops)
+//! clear all the way. The first carries the object to a spot just past the goal wall's free
+//! end, or along bin 1 pointing −y with the wrist past the object wall's end, and sets it
+//! down (pressed into the floor so a plate tilted in the grasp lands level); the second
+//! grasps it again, wrist towards the robot and +y (+x−y first), chosen by the clearance of
+//! its approach and of the carry to the goal, at a quicker pace. Over the trash can the open
+//! fingers slide out level before rising (they still hold the dumbbell's upper disc).
 
 mod clearance;
 mod grasp;
