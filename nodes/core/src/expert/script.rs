@@ -674,22 +674,13 @@ impl Expert {
         bottom: f64,
         goal_wall: bool,
     ) {
-        let start = self.mark();
-        let options = shelf_side_options(goal_wall);
-        let mut best: Option<((f64, f64), f64)> = None;
-        for &option in &options {
-            let gap = self.shelf_front(model, h, held, bottom, option, true);
-            if gap >= MIN_CLEARANCE {
-                return;
-            }
-            if best.is_none_or(|(_, b)| gap > b) {
-                best = Some((option, gap));
-            }
-            self.rewind(start);
-        }
-        if let Some((option, _)) = best {
-            self.shelf_front(model, h, held, bottom, option, false);
-        }
+        self.first_with_gap(
+            &shelf_side_options(goal_wall),
+            |e, option| e.shelf_front(model, h, held, bottom, option, true),
+            |e, option| {
+                e.shelf_front(model, h, held, bottom, option, false);
+            },
+        );
     }
 
     /// Plans the carry to in front of the shelf with the object clear of its front (y 0.14),
@@ -764,13 +755,31 @@ impl Expert {
         options: &[T],
         plan: impl Fn(&mut Self, T),
     ) {
+        let from = self.plan.len();
+        self.first_with_gap(
+            options,
+            |e, option| {
+                e.missed = false;
+                plan(e, option);
+                e.plan_clearance(model, from) - if e.missed { UNREACHED } else { 0.0 }
+            },
+            &plan,
+        );
+    }
+
+    /// Keeps the plan of the first of `options` whose `trial` (which plans it and returns its
+    /// gap to the arena) keeps [`MIN_CLEARANCE`]; else rewinds and plans the one with the
+    /// largest gap with `plan`.
+    fn first_with_gap<T: Copy>(
+        &mut self,
+        options: &[T],
+        trial: impl Fn(&mut Self, T) -> f64,
+        plan: impl Fn(&mut Self, T),
+    ) {
         let start = self.mark();
         let mut best: Option<(T, f64)> = None;
         for &option in options {
-            self.missed = false;
-            plan(self, option);
-            let gap =
-                self.plan_clearance(model, start.len) - if self.missed { UNREACHED } else { 0.0 };
+            let gap = trial(self, option);
             if gap >= MIN_CLEARANCE {
                 return;
             }
