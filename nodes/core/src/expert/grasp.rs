@@ -125,13 +125,13 @@ pub(super) enum Headings {
     /// turning towards +x (away from the robot), which arms with a shorter reach need for
     /// objects on bin 1's far side.
     TowardsBin2,
-    /// For grasping an object set down just past the goal wall's free end again: the wrist
-    /// on the far side of the wall's line (+x−y first: wrist towards the robot and bin 2's
-    /// middle), so carrying the object on to the goal keeps the wrist off the wall. The
-    /// carry's clearance decides among them.
+    /// For grasping a set-down object again (just past the goal wall's free end, or past the
+    /// object wall's end): the wrist towards the robot and +y (+x−y first), so carrying the
+    /// object on to the goal keeps the wrist off the wall. The carry's clearance decides
+    /// among them.
     Regrasp,
-    /// −y first (the wrist on bin 2's side of the object, past the end of an object wall or
-    /// door between robot and object), then as [`Headings::TowardsBin2`]: for carrying an
+    /// −y first (the wrist on bin 2's side of the object, past the end of the object wall
+    /// between robot and object), then as [`Headings::TowardsBin2`]: for carrying an
     /// object along bin 1 behind the wall, to be grasped again further on.
     AlongBin1,
 }

@@ -3,7 +3,7 @@
 use std::collections::VecDeque;
 use std::f64::consts::FRAC_PI_2;
 
-use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Point2, Point3, Quaternion, UnitQuaternion, Vector3};
 
 use crate::TaskSpec;
 use crate::arena::{SHELF, TRASH_CAN, object_geometry, objective_arena};
@@ -55,8 +55,9 @@ const REGRASP_PACE: f64 = 0.6;
 /// How far below its resting height (m) the gripper lowers a set-down object before letting
 /// go: the plate tilts in a rim grasp while carried (0.4 rad) and, let go just above the
 /// floor, stays tilted on its stem's edge where no rim grasp takes it again; pressed down,
-/// the floor turns it level first (the dumbbell likewise). Side-grasp Pushes past the wall
-/// and goal wall, 5 seeds: +0.5 cm 2.0 of 16 successes, −2 cm 6.8, −3 cm 7.0, −4.5 cm 6.4.
+/// the floor turns it level first (the dumbbell likewise). Summed success rate of the 16
+/// side-grasp Pushes past the object wall and goal wall, 5 seeds: let go 0.5 cm above rest
+/// 2.0, pressed 2 cm 6.8, 2.5 cm 7.4, 3 cm 7.0, 4.5 cm 6.4.
 const SET_DOWN_PRESS: f64 = 0.025;
 /// Grasps tried again after one that did not lift the object.
 const MAX_RETRIES: usize = 2;
@@ -202,8 +203,6 @@ pub struct Expert {
     grasp: Option<Grasp>,
     /// Where the object was when the grasp was planned (m).
     grasp_object: Point3<f64>,
-    /// The task's goal (the object's target position, m).
-    goal: Point3<f64>,
     /// The arm's distance to the arena, for choosing among IK solutions.
     clearance: Clearance,
     /// Orientations of grasps that did not lift the object (not tried again).
@@ -236,7 +235,6 @@ impl Expert {
             gripper: open(),
             grasp: None,
             grasp_object: Point3::origin(),
-            goal: Point3::origin(),
             clearance: Clearance::new(robot_model(task.robot), task.objective, task.obstacle),
             failed: Vec::new(),
             lift_start_pad_z: 0.0,
@@ -347,7 +345,15 @@ impl Expert {
                     .partition(|g| self.failed.iter().all(|f| f.angle_to(&g.orientation) > 0.1));
                 candidates.extend(tried);
                 self.grasp_object = object;
-                self.goal = env.goal();
+                // Where the object is carried straight on from the grasp (to the goal after a
+                // regrasp, to the spot where it is set down behind the object wall): that
+                // carry must keep clear too.
+                let carry_to = match self.set_down {
+                    _ if task.objective != Objective::Push => None,
+                    _ if self.regrasped => Some(env.goal().xy()),
+                    Some(spot) if !goal_wall => Some(spot.into()),
+                    _ => None,
+                };
                 let clear_z = if walled {
                     OVER_OBJECT_WALL_Z
                 } else if self.regrasped {
@@ -361,7 +367,7 @@ impl Expert {
                 let start = (self.pad, self.orientation);
                 let mut best: Option<(Grasp, f64)> = None;
                 for grasp in candidates {
-                    let gap = self.plan_approach(model, &grasp, clear_z);
+                    let gap = self.plan_approach(model, &grasp, clear_z, carry_to);
                     if gap >= MIN_CLEARANCE {
                         best = None;
                         break;
@@ -374,7 +380,7 @@ impl Expert {
                     (self.pad, self.orientation) = start;
                 }
                 if let Some((grasp, _)) = best {
-                    self.plan_approach(model, &grasp, clear_z);
+                    self.plan_approach(model, &grasp, clear_z, carry_to);
                 }
             }
             Phase::Approach => {
@@ -469,10 +475,9 @@ impl Expert {
                             } else {
                                 &[None]
                             }
-                        } else if goal_wall && !self.regrasped {
-                            &[Some(AROUND_GOAL_WALL_X), Some(PUSH_WIDE_LANE_X)]
                         } else if goal_wall {
-                            // Grasped again past the wall: straight on.
+                            // A side-grasped object comes here only grasped again past the
+                            // wall (see `relocation`): straight on.
                             &[None]
                         } else {
                             &[None, Some(AROUND_GOAL_WALL_X), Some(PUSH_WIDE_LANE_X)]
@@ -586,7 +591,7 @@ impl Expert {
                 let held = self.pad - object.coords;
                 match task.objective {
                     _ if self.set_down.is_some() => {
-                        // Down to just above where it rested.
+                        // Down to where it rested, pressed a little into the floor.
                         let z = self.grasp_object.z - SET_DOWN_PRESS + held.z;
                         let t = Vector3::new(self.pad.x, self.pad.y, z);
                         self.segment(model, t, self.orientation, 1.0);
@@ -847,9 +852,16 @@ impl Expert {
 
     /// Plans the approach to `grasp`'s pre-grasp (up to `clear_z`, over, down) and returns the
     /// smallest clearance from the arena along it and along the last stretch into the grasp
-    /// (which is planned only later, from where the object is then), less [`UNLIFTABLE`] if
+    /// (which is planned only later, from where the object is then) and, with `carry_to`,
+    /// along the carry of the lifted object straight to there (xy, m); less [`UNLIFTABLE`] if
     /// the gripper cannot then rise straight, less [`UNREACHED`] if a pose is out of reach.
-    fn plan_approach(&mut self, model: &RobotModel, grasp: &Grasp, clear_z: f64) -> f64 {
+    fn plan_approach(
+        &mut self,
+        model: &RobotModel,
+        grasp: &Grasp,
+        clear_z: f64,
+        carry_to: Option<Point2<f64>>,
+    ) -> f64 {
         self.missed = false;
         self.grasp = Some(*grasp);
         self.gripper = grasp.open;
@@ -888,14 +900,6 @@ impl Expert {
             self.segment(model, lift, grasp.orientation, 1.0);
         }
         let liftable = self.straight;
-        // Where the object is carried straight on (to the goal after a regrasp, to the spot
-        // where it is set down behind the object wall or door), that carry must keep clear too.
-        let carry_to = match self.set_down {
-            _ if self.task.objective != Objective::Push => None,
-            _ if self.regrasped => Some(self.goal.xy()),
-            Some(spot) if self.task.obstacle != Obstacle::GoalWall => Some(spot.into()),
-            _ => None,
-        };
         let gap = if let Some(to) = carry_to {
             let carry = (to - self.grasp_object.xy()).push(0.0);
             let up = Vector3::z() * (PUSH_SIDE_CARRY_Z - self.grasp_object.z).max(0.0);
