@@ -67,3 +67,40 @@ fn the_expert_regrasps_past_the_goal_wall() {
     );
     assert!(success, "the object never reached the goal");
 }
+
+/// Pushing the plate out from behind the door: no side grasp keeps the wrist off the door's
+/// posts, so the expert pushes it with two fingers held apart behind it, never closing them.
+#[test]
+fn the_expert_pushes_from_behind_the_door_without_a_grasp() {
+    use composuite_core::env::{Action, Env, EnvConfig};
+    use composuite_core::expert::{Expert, Phase};
+
+    for name in [
+        "Panda/plate/object_door/push",
+        "IIWA/dumbbell/object_door/push",
+    ] {
+        let task: TaskSpec = name.parse().unwrap();
+        let mut env = Env::new(task, EnvConfig::default());
+        env.reset(0).unwrap();
+        let mut expert = Expert::new(task);
+        let (mut narrowest, mut pushed, mut success) = (f64::INFINITY, false, false);
+        while env.ended().is_none() {
+            let action = expert.act(&env);
+            if let Action::Absolute {
+                gripper: Some((opening, _)),
+                ..
+            } = action
+            {
+                narrowest = narrowest.min(opening);
+            }
+            success |= env.step(&action).unwrap().info.success;
+            pushed |= expert.phase() == Phase::Nudge;
+        }
+        assert!(pushed, "{name}: never pushed");
+        assert!(
+            narrowest > 0.03,
+            "{name}: the fingers closed to {narrowest}"
+        );
+        assert!(success, "{name}: the object never reached the goal");
+    }
+}

@@ -267,7 +267,7 @@ fn hollow_box_edge(o: Point3<f64>, orientation: &UnitQuaternion<f64>) -> Vector3
 }
 
 /// The horizontal axis the fingers close along for the grip-site `orientation` (unit, z 0).
-fn gripper_closing_axis(orientation: &UnitQuaternion<f64>) -> Vector3<f64> {
+pub(super) fn gripper_closing_axis(orientation: &UnitQuaternion<f64>) -> Vector3<f64> {
     let gripper =
         orientation * UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2);
     let mut c = gripper * Vector3::y();

@@ -23,7 +23,8 @@
 //! opens, backs off, and the next grasp is tried (at most twice).
 //!
 //! Phases: approach (to the pre-grasp, clear of the object and the obstacles) → descend (the
-//! last stretch into the grasp) → close → lift → transport → the objective's finish (lower
+//! last stretch into the grasp; for a push without a grasp, up to the object, then nudge to
+//! the goal) → close → lift → transport → the objective's finish (lower
 //! into bin 2 / slide to the goal / over the trash can / into the shelf) → release → retreat
 //! → hold.
 //!
@@ -46,10 +47,18 @@
 //! grasps it again, wrist towards the robot and +y (+x−y first), chosen by the clearance of
 //! its approach and of the carry to the goal, at a quicker pace. Over the trash can the open
 //! fingers slide out level before rising (they still hold the dumbbell's upper disc).
+//!
+//! From behind the door the plate and the dumbbell are pushed without a grasp ([`nudge`]):
+//! no side grasp keeps the low wrist off the door's posts (checked pose by pose), while a
+//! gripper pointing down keeps wrist and forearm above the pads. Its two fingers, held 4 cm
+//! apart behind the object, push it along the floor in legs of 5 cm, each aimed again from
+//! where the object is then; the object rolls back between the fingers when pushed
+//! off-centre.
 
 mod clearance;
 mod grasp;
 mod motion;
+mod nudge;
 mod reach;
 mod script;
 

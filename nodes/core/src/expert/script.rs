@@ -13,8 +13,11 @@ use crate::kinematics::link_pose;
 use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel, robot_model};
 
 use super::clearance::{Clearance, MIN_CLEARANCE, best_clear};
-use super::grasp::{Grasp, GraspInput, Headings, closed, grasp_candidates, open};
+use super::grasp::{
+    Grasp, GraspInput, Headings, closed, grasp_candidates, gripper_closing_axis, open,
+};
 use super::motion::{PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_solutions, smoothstep, steps};
+use super::nudge;
 
 /// Pad-centre height (m) that clears the object wall and door (tops at z 1.07).
 const OVER_OBJECT_WALL_Z: f64 = 1.17;
@@ -61,6 +64,8 @@ const REGRASP_PACE: f64 = 0.6;
 const SET_DOWN_PRESS: f64 = 0.025;
 /// Grasps tried again after one that did not lift the object.
 const MAX_RETRIES: usize = 2;
+/// Duration of one leg of a push without a grasp (s; legs are up to 5 cm).
+const NUDGE_LEG_SECONDS: f64 = 0.8;
 /// Object-centre height (m) for a plain lift and carry.
 const CARRY_Z: f64 = 1.05;
 /// How far above the object's resting height a top-grasped object is carried while pushing
@@ -162,6 +167,8 @@ pub enum Phase {
     Transport,
     /// The objective's placing motion (lower into the bin; slide to the goal; over the can).
     Place,
+    /// Pushing the object to the goal without a grasp (see [`super::nudge`]).
+    Nudge,
     /// Opening the fingers.
     Release,
     /// Moving the gripper away.
@@ -288,6 +295,36 @@ impl Expert {
         }
     }
 
+    /// Whether the object is pushed without a grasp ([`super::nudge`]): the plate and the
+    /// dumbbell from behind the door, where no side grasp keeps the arm off the door's posts
+    /// (see the note on issue 5).
+    fn nudges(&self) -> bool {
+        let side_grasped = matches!(self.task.object, Object::Plate | Object::Dumbbell);
+        self.task.objective == Objective::Push
+            && self.task.obstacle == Obstacle::ObjectDoor
+            && side_grasped
+    }
+
+    /// Plans the next leg of a push without a grasp from where the pads and the object are
+    /// now, the fingers' closing axis kept across the push; done once the object is at the goal.
+    fn nudge_leg(&mut self, env: &Env, model: &RobotModel, object: Point3<f64>) {
+        let (pad, _) = pads_at(model, &env.world().arm_positions());
+        let Some((target, u)) = nudge::leg(self.task.object, object, env.goal().xy(), pad) else {
+            self.phase = Phase::Done;
+            return;
+        };
+        let across = u.cross(&Vector3::z());
+        let current = gripper_closing_axis(&self.orientation);
+        let closing = if across.dot(&current) >= 0.0 {
+            across
+        } else {
+            -across
+        };
+        let orientation = nudge::pusher_orientation(u, closing, nudge::lean_of(&self.orientation));
+        let t = Vector3::new(target.x, target.y, self.pad.z);
+        self.segment(model, t, orientation, NUDGE_LEG_SECONDS);
+    }
+
     /// Whether the grasp is a top-down one.
     fn top_down(&self) -> bool {
         self.grasp.is_none_or(|g| g.top_down)
@@ -308,9 +345,7 @@ impl Expert {
             Phase::Start => {
                 let q = env.world().arm_positions();
                 self.q = Some(q);
-                let grip = link_pose(model, &q, GRIP_SITE_LINK).expect("grip site link");
-                self.orientation = grip.rotation;
-                self.pad = (grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE)).coords;
+                (self.pad, self.orientation) = pads_at(model, &q);
                 self.phase = Phase::Approach;
                 // The Panda's forearm hangs low over walls near the robot unless the gripper
                 // leans; the other arms clear them with a vertical gripper.
@@ -328,17 +363,21 @@ impl Expert {
                 } else {
                     Headings::TowardsBin2
                 };
-                let candidates = grasp_candidates(&GraspInput {
-                    model,
-                    q,
-                    object: task.object,
-                    objective: task.objective,
-                    obstacle: task.obstacle,
-                    position: object,
-                    rotation: object_rotation,
-                    tilt,
-                    headings,
-                });
+                let candidates = if self.nudges() {
+                    nudge::pushers(task.object, object, env.goal().xy())
+                } else {
+                    grasp_candidates(&GraspInput {
+                        model,
+                        q,
+                        object: task.object,
+                        objective: task.objective,
+                        obstacle: task.obstacle,
+                        position: object,
+                        rotation: object_rotation,
+                        tilt,
+                        headings,
+                    })
+                };
                 // Grasps that already failed go last.
                 let (mut candidates, tried): (Vec<Grasp>, Vec<Grasp>) = candidates
                     .into_iter()
@@ -350,6 +389,7 @@ impl Expert {
                 // carry must keep clear too.
                 let carry_to = match self.set_down {
                     _ if task.objective != Objective::Push => None,
+                    _ if self.nudges() => Some(env.goal().xy()),
                     _ if self.regrasped => Some(env.goal().xy()),
                     Some(spot) if !goal_wall => Some(spot.into()),
                     _ => None,
@@ -363,23 +403,36 @@ impl Expert {
                     object.z + 0.12
                 };
                 // The first grasp (in the planner's order of preference) whose whole approach
-                // keeps clear of the arena, else the one coming closest to that.
+                // keeps clear of the arena, else the one coming closest to that. Of the ways
+                // to push without a grasp, the quickest that keeps clear: the other way round
+                // may need a turn of the whole arm (the Jaco's: 9 s of 25).
+                let nudging = self.nudges();
                 let start = (self.pad, self.orientation);
-                let mut best: Option<(Grasp, f64)> = None;
+                let mut best: Option<(Grasp, f64, usize)> = None;
                 for grasp in candidates {
                     let gap = self.plan_approach(model, &grasp, clear_z, carry_to);
-                    if gap >= MIN_CLEARANCE {
+                    let clear = gap >= MIN_CLEARANCE;
+                    if clear && !nudging {
                         best = None;
                         break;
                     }
-                    if best.is_none_or(|(_, b)| gap > b) {
-                        best = Some((grasp, gap));
+                    let steps = self.plan.len();
+                    let better = best.is_none_or(|(_, b, n)| {
+                        let best_clear = b >= MIN_CLEARANCE;
+                        if clear && best_clear {
+                            steps < n
+                        } else {
+                            !best_clear && (clear || gap > b)
+                        }
+                    });
+                    if better {
+                        best = Some((grasp, gap, steps));
                     }
                     self.plan.clear();
                     self.q = Some(q);
                     (self.pad, self.orientation) = start;
                 }
-                if let Some((grasp, _)) = best {
+                if let Some((grasp, _, _)) = best {
                     self.plan_approach(model, &grasp, clear_z, carry_to);
                 }
             }
@@ -391,6 +444,11 @@ impl Expert {
                 self.grasp_object = object;
                 self.segment(model, pad, self.orientation, 1.5 * self.pace());
             }
+            Phase::Descend if self.nudges() => {
+                self.phase = Phase::Nudge;
+                self.nudge_leg(env, model, object);
+            }
+            Phase::Nudge => self.nudge_leg(env, model, object),
             Phase::Descend => {
                 self.phase = Phase::Close;
                 self.gripper = closed(model);
@@ -735,10 +793,8 @@ impl Expert {
 
     /// How far (m) the last planned joints put the pads from where they were planned to be.
     fn reached(&self, model: &RobotModel) -> f64 {
-        let q = self.q.expect("planned");
-        let grip = link_pose(model, &q, GRIP_SITE_LINK).expect("grip site link");
-        let pad = grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE);
-        (pad.coords - self.pad).norm()
+        let (pad, _) = pads_at(model, &self.q.expect("planned"));
+        (pad - self.pad).norm()
     }
 
     /// Keeps the last target for `seconds`, with the current gripper command.
@@ -902,7 +958,12 @@ impl Expert {
         let liftable = self.straight;
         let gap = if let Some(to) = carry_to {
             let carry = (to - self.grasp_object.xy()).push(0.0);
-            let up = Vector3::z() * (PUSH_SIDE_CARRY_Z - self.grasp_object.z).max(0.0);
+            // Pushed without a grasp the object stays on the floor.
+            let up = if self.nudges() {
+                Vector3::zeros()
+            } else {
+                Vector3::z() * (PUSH_SIDE_CARRY_Z - self.grasp_object.z).max(0.0)
+            };
             let from = self.plan.len();
             self.segment(model, grasp.pad + up, grasp.orientation, 1.0);
             self.segment(model, grasp.pad + up + carry, grasp.orientation, 2.0);
@@ -1020,6 +1081,13 @@ impl Expert {
         self.pad = pad;
         self.orientation = orientation;
     }
+}
+
+/// The pads' centre and the grip site's orientation with the arm at `q`.
+fn pads_at(model: &RobotModel, q: &[f64; ARM_DOF]) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    let grip = link_pose(model, q, GRIP_SITE_LINK).expect("grip site link");
+    let pad = grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE);
+    (pad.coords, grip.rotation)
 }
 
 /// The largest joint change (rad) between consecutive targets of `path` (starting at `q0`).
