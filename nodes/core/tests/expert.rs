@@ -48,7 +48,7 @@ fn the_expert_regrasps_past_the_goal_wall() {
     use composuite_core::env::{Env, EnvConfig};
     use composuite_core::expert::{Expert, Phase};
 
-    let task: TaskSpec = "IIWA/dumbbell/goal_wall/push".parse().unwrap();
+    let task: TaskSpec = "Gen3/dumbbell/goal_wall/push".parse().unwrap();
     let mut env = Env::new(task, EnvConfig::default());
     env.reset(0).unwrap();
     let mut expert = Expert::new(task);

@@ -27,7 +27,7 @@ pub use fixtures::{
 pub use objective_arena::{ObjectiveArena, objective_arena};
 pub use objects::{MATERIAL_COPY_MASS, OBJECT_DENSITY, ObjectGeometry, object_geometry};
 pub use obstacles::{Footprint, ObstacleGeometry, obstacle_geometry};
-pub use primitive::{Friction, Part, Placed, Primitive};
+pub use primitive::{Friction, Part, Placed, Primitive, merged_solids};
 pub use start_region::{KeepOut, PLACEMENT_ATTEMPTS, StartRegion, object_start_region};
 
 use crate::axes::{Object, Objective, Obstacle};

@@ -652,3 +652,47 @@ fn aabb_of_a_turned_cylinder() {
         "volume",
     );
 }
+
+/// In Push the two bin floors fill one box (facts §2.1: they overlap by 3.5 cm); they collide
+/// as that one box, so nothing sliding from bin 1 to bin 2 catches on bin 2's buried edge.
+/// Elsewhere the floors are apart and every solid collides as it is.
+#[test]
+fn flush_floors_collide_as_one_box() {
+    for objective in Objective::all() {
+        let parts = arena_parts(objective, Obstacle::NoObstacle);
+        let colliding = parts.iter().filter(|p| p.collides).count();
+        let solids = merged_solids(&parts);
+        if objective != Objective::Push {
+            assert_eq!(solids.len(), colliding, "{objective:?}");
+            continue;
+        }
+        assert_eq!(solids.len(), colliding - 1);
+        let (index, floor) = solids
+            .iter()
+            .find(|(_, s)| s.name == "bin1/floor")
+            .expect("the merged floor keeps bin 1's name");
+        assert_eq!(parts[*index].name, "bin1/floor");
+        assert!(solids.iter().all(|(_, s)| s.name != "bin2/floor"));
+        assert_span(floor, 0, [-0.1, 0.3]);
+        assert_span(floor, 1, [-0.51, 0.305]);
+        assert_span(floor, 2, [0.78, 0.82]);
+    }
+    // Boxes apart, or matching in only one extent, stay apart.
+    let floor = *find(
+        &arena_parts(Objective::Push, Obstacle::NoObstacle),
+        "bin1/floor",
+    );
+    let moved = |dy: f64| Placed {
+        pose: Isometry3::translation(0.0, dy, 0.0) * floor.pose,
+        ..floor
+    };
+    assert_eq!(merged_solids(&[floor, moved(0.5 + 1e-6)]).len(), 2);
+    assert_eq!(merged_solids(&[floor, moved(0.5)]).len(), 1);
+    let taller = Placed {
+        shape: Primitive::Box {
+            half_extents: Vector3::new(0.2, 0.25, 0.03),
+        },
+        ..moved(0.3)
+    };
+    assert_eq!(merged_solids(&[floor, taller]).len(), 2);
+}

@@ -125,15 +125,11 @@ pub(super) enum Headings {
     /// turning towards +x (away from the robot), which arms with a shorter reach need for
     /// objects on bin 1's far side.
     TowardsBin2,
-    /// For grasping a set-down object again (just past the goal wall's free end, or past the
-    /// object wall's end): the wrist towards the robot and +y (+x−y first), so carrying the
+    /// For grasping a set-down object again (just past the goal wall's free end): the wrist
+    /// towards the robot and +y (+x−y first), so carrying the
     /// object on to the goal keeps the wrist off the wall. The carry's clearance decides
     /// among them.
     Regrasp,
-    /// −y first (the wrist on bin 2's side of the object, past the end of the object wall
-    /// between robot and object), then as [`Headings::TowardsBin2`]: for carrying an
-    /// object along bin 1 behind the wall, to be grasped again further on.
-    AlongBin1,
 }
 
 impl Headings {
@@ -147,11 +143,6 @@ impl Headings {
                 Vector3::x(),
                 Vector3::new(d, -d, 0.0),
             ],
-            Headings::AlongBin1 => {
-                let mut all = vec![-Vector3::y()];
-                all.extend(Headings::TowardsBin2.directions());
-                all
-            }
             Headings::Regrasp => vec![
                 Vector3::new(d, -d, 0.0),
                 -Vector3::y(),

@@ -39,21 +39,23 @@
 //! the shelf and a turn of the gripper about the vertical (swinging the wrist and forearm
 //! away from the walls) are chosen by the arm's clearance along the way in, slide included.
 //!
-//! Pushing a side-grasped object past the goal wall or from behind the object wall takes two
-//! grasps: no single heading keeps the wrist (10–20 cm behind the pads, below the walls' tops)
-//! clear all the way. The first carries the object to a spot just past the goal wall's free
-//! end, or along bin 1 pointing −y with the wrist past the object wall's end, and sets it
-//! down (pressed into the floor so a plate tilted in the grasp lands level); the second
-//! grasps it again, wrist towards the robot and +y (+x−y first), chosen by the clearance of
-//! its approach and of the carry to the goal, at a quicker pace. Over the trash can the open
-//! fingers slide out level before rising (they still hold the dumbbell's upper disc).
+//! Pushing a side-grasped object past the goal wall takes two grasps: no single heading
+//! keeps the wrist (10–20 cm behind the pads, below the wall's top) clear all the way. The
+//! first carries the object to a spot just past the wall's free end and sets it down (pressed
+//! into the floor so a plate tilted in the grasp lands level); the second grasps it again,
+//! wrist towards the robot and +y (+x−y first), chosen by the clearance of its approach and
+//! of the carry to the goal, at a quicker pace. Over the trash can the open fingers slide out
+//! level before rising (they still hold the dumbbell's upper disc).
 //!
-//! From behind the door the plate and the dumbbell are pushed without a grasp ([`nudge`]):
-//! no side grasp keeps the low wrist off the door's posts (checked pose by pose), while a
-//! gripper pointing down keeps wrist and forearm above the pads. Its two fingers, held 4 cm
-//! apart behind the object, push it along the floor in legs of 5 cm, each aimed again from
-//! where the object is then; the object rolls back between the fingers when pushed
-//! off-centre.
+//! From behind the object wall and the door the plate and the dumbbell are pushed without a
+//! grasp ([`nudge`]): no side grasp keeps the low wrist off the wall (checked pose by pose),
+//! while a gripper pointing down keeps wrist and forearm above the pads. Its two fingers, held
+//! 4 cm apart behind the object, push it along the floor in legs of 5 cm, each aimed again
+//! from where the object is then; the object rolls back between the fingers when pushed
+//! off-centre, and where it slips out (or past the goal) the fingers are set behind it again.
+//! The Panda, whose two-grasp plan does not fit in the episode, pushes them round the goal
+//! wall too: first to a point in front of the wall's line from which the way to the goal
+//! passes the wall's free end.
 
 mod clearance;
 mod grasp;

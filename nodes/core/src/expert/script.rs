@@ -44,15 +44,6 @@ const UNLIFTABLE: f64 = 0.5;
 /// end (x 0.11) with the plate's rim clear of it, and far enough from bin 2's far wall
 /// (x 0.29) for the fingers of the second grasp.
 const GOAL_WALL_SPOT: [f64; 2] = [0.2, 0.0];
-/// How far along bin 1 (y, m) an object behind the object wall is carried (gripper pointing
-/// −y, its wrist past the wall's end at y −0.16) before it is set down and grasped again
-/// pointing +x−y for the rest of the way: the pose-by-pose IK reachability check
-/// (`expert::reach` test) finds collision-free joints for −y up to here and for +x−y from
-/// y −0.20 on, for all four arms. Objects already past −0.21 are grasped +x−y at once.
-const OBJECT_WALL_SPOT_Y: f64 = -0.15;
-/// x (m) of that spot: far enough out that the second grasp's wrist, 23 cm back towards
-/// the robot and +y, passes over bin 2's near wall (x −0.1, top z 0.90) rather than onto it.
-const SPOT_BEHIND_WALL_X: f64 = 0.2;
 /// The second grasp's approach, grasp and lift take this fraction of the usual time.
 const REGRASP_PACE: f64 = 0.6;
 /// How far below its resting height (m) the gripper lowers a set-down object before letting
@@ -66,6 +57,9 @@ const SET_DOWN_PRESS: f64 = 0.025;
 const MAX_RETRIES: usize = 2;
 /// Duration of one leg of a push without a grasp (s; legs are up to 5 cm).
 const NUDGE_LEG_SECONDS: f64 = 0.8;
+/// How far the pads rise (m) when the object is no longer between the fingers, before they
+/// are set behind it again: above the dumbbell's upper disc from 2 cm over the floor.
+const NUDGE_LOST_RISE: f64 = 0.09;
 /// Object-centre height (m) for a plain lift and carry.
 const CARRY_Z: f64 = 1.05;
 /// How far above the object's resting height a top-grasped object is carried while pushing
@@ -227,6 +221,8 @@ pub struct Expert {
     set_down: Option<[f64; 2]>,
     /// Whether the object has been set down and grasped again.
     regrasped: bool,
+    /// Points a push without a grasp takes the object through before the goal.
+    via: Vec<Point2<f64>>,
 }
 
 impl Expert {
@@ -249,6 +245,7 @@ impl Expert {
             straight: true,
             set_down: None,
             regrasped: false,
+            via: Vec::new(),
         }
     }
 
@@ -277,41 +274,57 @@ impl Expert {
         if self.regrasped { REGRASP_PACE } else { 1.0 }
     }
 
-    /// Where a Push with a side grasp first sets the object down, to be grasped again: past
-    /// the goal wall's free end; further along bin 1 behind the object wall. None once
-    /// grasped again, for objects grasped from the top and where one grasp does. (Behind the
-    /// door no such plan was found: see the note on issue 5.)
-    fn relocation(&self, object: Point3<f64>) -> Option<[f64; 2]> {
-        let side_grasped = matches!(self.task.object, Object::Plate | Object::Dumbbell);
-        if self.task.objective != Objective::Push || !side_grasped || self.regrasped {
-            return None;
-        }
-        match self.task.obstacle {
-            Obstacle::GoalWall => Some(GOAL_WALL_SPOT),
-            Obstacle::ObjectWall if object.y < OBJECT_WALL_SPOT_Y - 0.06 => {
-                Some([SPOT_BEHIND_WALL_X, OBJECT_WALL_SPOT_Y])
-            }
-            _ => None,
-        }
+    /// Where a Push with a side grasp first sets the object down, to be grasped again: just
+    /// past the goal wall's free end. None once grasped again, for objects grasped from the
+    /// top, and where the object is pushed without a grasp.
+    fn relocation(&self) -> Option<[f64; 2]> {
+        let task = self.task;
+        let side_grasped = matches!(task.object, Object::Plate | Object::Dumbbell);
+        let relocates = task.objective == Objective::Push
+            && task.obstacle == Obstacle::GoalWall
+            && side_grasped
+            && !self.regrasped
+            && !self.nudges();
+        relocates.then_some(GOAL_WALL_SPOT)
     }
 
     /// Whether the object is pushed without a grasp ([`super::nudge`]): the plate and the
-    /// dumbbell from behind the door, where no side grasp keeps the arm off the door's posts
-    /// (see the note on issue 5).
+    /// dumbbell from behind the object wall or the door, where no side grasp keeps the low
+    /// wrist off the wall (see the note on issue 5); round the goal wall only by the Panda,
+    /// whose two-grasp plan does not fit in the episode (plate and dumbbell 0 → 0.1 over 10
+    /// seeds; the other arms do better with two grasps: 0.37 against 0.17).
     fn nudges(&self) -> bool {
-        let side_grasped = matches!(self.task.object, Object::Plate | Object::Dumbbell);
-        self.task.objective == Objective::Push
-            && self.task.obstacle == Obstacle::ObjectDoor
-            && side_grasped
+        let task = self.task;
+        let side_grasped = matches!(task.object, Object::Plate | Object::Dumbbell);
+        let past = behind_wall(task.obstacle)
+            || task.obstacle == Obstacle::GoalWall && task.robot == Robot::Panda;
+        task.objective == Objective::Push && side_grasped && past
     }
 
     /// Plans the next leg of a push without a grasp from where the pads and the object are
     /// now, the fingers' closing axis kept across the push; done once the object is at the goal.
     fn nudge_leg(&mut self, env: &Env, model: &RobotModel, object: Point3<f64>) {
         let (pad, _) = pads_at(model, &env.world().arm_positions());
-        let Some((target, u)) = nudge::leg(self.task.object, object, env.goal().xy(), pad) else {
-            self.phase = Phase::Done;
-            return;
+        if self
+            .via
+            .first()
+            .is_some_and(|v| (object.xy() - v).norm() < nudge::VIA_PASSED)
+        {
+            self.via.remove(0);
+        }
+        let (target, u) = match nudge::leg(self.task.object, object, self.nudge_target(env), pad) {
+            nudge::Leg::To(target, u) => (target, u),
+            nudge::Leg::Done => {
+                self.phase = Phase::Done;
+                return;
+            }
+            nudge::Leg::Lost => {
+                // Up clear of the object, then set the fingers behind it again.
+                let up = Vector3::new(self.pad.x, self.pad.y, self.pad.z + NUDGE_LOST_RISE);
+                self.segment(model, up, self.orientation, 0.6);
+                self.phase = Phase::Start;
+                return;
+            }
         };
         let across = u.cross(&Vector3::z());
         let current = gripper_closing_axis(&self.orientation);
@@ -320,9 +333,21 @@ impl Expert {
         } else {
             -across
         };
-        let orientation = nudge::pusher_orientation(u, closing, nudge::lean_of(&self.orientation));
+        // The lean so far, unless another keeps the arm clearer of the walls on this leg
+        // (the nearest such).
+        let mut orientations = nudge::pusher_orientations(self.task.object, u, closing);
+        let now = self.orientation;
+        orientations.sort_by(|a, b| a.angle_to(&now).total_cmp(&b.angle_to(&now)));
         let t = Vector3::new(target.x, target.y, self.pad.z);
-        self.segment(model, t, orientation, NUDGE_LEG_SECONDS);
+        self.first_clear(model, &orientations, |e, orientation| {
+            e.segment(model, t, orientation, NUDGE_LEG_SECONDS);
+        });
+    }
+
+    /// Where a push without a grasp takes the object next: the first point on its way, else
+    /// the goal.
+    fn nudge_target(&self, env: &Env) -> Point2<f64> {
+        self.via.first().copied().unwrap_or_else(|| env.goal().xy())
     }
 
     /// Whether the grasp is a top-down one.
@@ -355,16 +380,15 @@ impl Expert {
                 } else {
                     0.0
                 };
-                self.set_down = self.relocation(object);
+                self.set_down = self.relocation();
                 let headings = if self.regrasped {
                     Headings::Regrasp
-                } else if self.set_down.is_some() && task.obstacle == Obstacle::ObjectWall {
-                    Headings::AlongBin1
                 } else {
                     Headings::TowardsBin2
                 };
                 let candidates = if self.nudges() {
-                    nudge::pushers(task.object, object, env.goal().xy())
+                    self.via = nudge::route(task.object, task.obstacle, object, env.goal().xy());
+                    nudge::pushers(task.object, object, self.nudge_target(env))
                 } else {
                     grasp_candidates(&GraspInput {
                         model,
@@ -378,21 +402,28 @@ impl Expert {
                         headings,
                     })
                 };
+                if candidates.is_empty() {
+                    // Pushed without a grasp, the object is already at the goal.
+                    self.phase = Phase::Done;
+                    return;
+                }
                 // Grasps that already failed go last.
                 let (mut candidates, tried): (Vec<Grasp>, Vec<Grasp>) = candidates
                     .into_iter()
                     .partition(|g| self.failed.iter().all(|f| f.angle_to(&g.orientation) > 0.1));
                 candidates.extend(tried);
                 self.grasp_object = object;
-                // Where the object is carried straight on from the grasp (to the goal after a
-                // regrasp, to the spot where it is set down behind the object wall): that
-                // carry must keep clear too.
-                let carry_to = match self.set_down {
-                    _ if task.objective != Objective::Push => None,
-                    _ if self.nudges() => Some(env.goal().xy()),
-                    _ if self.regrasped => Some(env.goal().xy()),
-                    Some(spot) if !goal_wall => Some(spot.into()),
-                    _ => None,
+                // Where the object is carried (or pushed) straight on from the grasp (to the
+                // goal after a regrasp; to the next point on the way of a push without a
+                // grasp): that carry must keep clear too.
+                let carry_to = if task.objective != Objective::Push {
+                    None
+                } else if self.nudges() {
+                    Some(self.nudge_target(env))
+                } else if self.regrasped {
+                    Some(env.goal().xy())
+                } else {
+                    None
                 };
                 let clear_z = if walled {
                     OVER_OBJECT_WALL_Z
@@ -506,16 +537,14 @@ impl Expert {
                 let held = self.pad - object.coords;
                 match task.objective {
                     Objective::Push if let Some([x, y]) = self.set_down => {
-                        // To the spot where the object is set down and grasped again; round
-                        // the goal wall's free end, else straight along bin 1.
+                        // Round the goal wall's free end to the spot where the object is set
+                        // down and grasped again.
                         let spot = Vector3::new(x, y, 0.0) + held;
-                        if goal_wall {
-                            let radius = object_geometry(task.object).horizontal_radius;
-                            let lane = AROUND_GOAL_WALL_X.min(BIN2_FAR_WALL_X - radius - 0.01);
-                            let lane = lane + held.x;
-                            self.segment(model, Vector3::new(lane, self.pad.y, h), o, 0.8);
-                            self.segment(model, Vector3::new(lane, spot.y, h), o, 1.5);
-                        }
+                        let radius = object_geometry(task.object).horizontal_radius;
+                        let lane = AROUND_GOAL_WALL_X.min(BIN2_FAR_WALL_X - radius - 0.01);
+                        let lane = lane + held.x;
+                        self.segment(model, Vector3::new(lane, self.pad.y, h), o, 0.8);
+                        self.segment(model, Vector3::new(lane, spot.y, h), o, 1.5);
                         self.segment(model, Vector3::new(spot.x, spot.y, h), o, 1.5);
                     }
                     Objective::Push => {
@@ -1067,10 +1096,11 @@ impl Expert {
             }
         }
         // A segment that ends short of its pose (no IK solution met it) marks the plan. Used
-        // only for the plate: there it steers the choice of rim grasps and bin spots to ones
-        // the arm reaches (plate 0.35 → 0.58 over 64 tasks × 2 seeds); for the dumbbell it
-        // rejects approaches that do work (the slide in ends within a few cm).
-        self.missed |= !end_met && self.task.object == Object::Plate;
+        // for the plate: there it steers the choice of rim grasps and bin spots to ones the
+        // arm reaches (plate 0.35 → 0.58 over 64 tasks × 2 seeds); for the dumbbell's grasps it
+        // rejects approaches that do work (the slide in ends within a few cm); and for pushes
+        // without a grasp, whose fingers must get down behind the object.
+        self.missed |= !end_met && (self.task.object == Object::Plate || self.nudges());
         for joints in line {
             self.plan.push_back(Action::Absolute {
                 joints,

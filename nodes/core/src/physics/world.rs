@@ -10,7 +10,7 @@ use super::robot_model::{
     robot_model,
 };
 use super::tags::{ColliderTag, Side};
-use crate::arena::{Placed, Primitive, object_geometry, robot_base_pose};
+use crate::arena::{Placed, Primitive, merged_solids, object_geometry, robot_base_pose};
 use crate::axes::{Object, Robot};
 
 /// Number of arm joints.
@@ -604,11 +604,12 @@ impl SimWorld {
         self.model.links.get(name).map(|l| self.link_pose(*l))
     }
 
-    /// Add the static parts of an arena (bins, fixture, obstacle); visual-only parts are skipped.
-    /// Each collider is tagged with its index in `parts`.
+    /// Add the static parts of an arena (bins, fixture, obstacle); visual-only parts are skipped,
+    /// boxes lying flush in one solid collide as that one box ([`merged_solids`]). Each
+    /// collider is tagged with its (first) index in `parts`.
     pub fn add_arena(&mut self, parts: &[Placed]) {
         let body = self.physics.insert_body(RigidBodyBuilder::fixed());
-        for (index, part) in parts.iter().enumerate().filter(|(_, p)| p.collides) {
+        for (index, part) in merged_solids(parts) {
             let (shape, pose) = primitive_shape(&part.shape, &part.pose);
             self.physics.insert_collider(
                 ColliderBuilder::new(shape)
