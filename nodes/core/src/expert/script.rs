@@ -128,6 +128,9 @@ const BIN2_SIDE_SPOTS: [[f64; 2]; 5] = [
     [0.1, 0.18],
     [0.2, 0.28],
 ];
+/// Turns of a side-grasped object's gripper about the vertical (rad) on its way into bin 2,
+/// tried in this order with each spot of [`BIN2_SIDE_SPOTS`].
+const CARRY_YAWS: [f64; 5] = [0.0, 0.35, -0.35, 0.7, -0.7];
 /// Top of bin 2's floor (m, facts §2.1).
 const PICK_PLACE_FLOOR: f64 = 0.82;
 /// Highest the origin of a side-grasped object is lowered to in bin 2 (m): under the bin's
@@ -599,9 +602,19 @@ impl Expert {
                         // reaches without touching the bin's walls (the wrist is behind and
                         // below the gripper); success comes as soon as the object's origin is
                         // under the bin's 0.9 m line with the gripper on it.
+                        // The gripper may turn about the vertical on the way (the object swings
+                        // round the pads): where the straight carry runs into a joint limit,
+                        // the arm swings through joint space instead and flings a plate held
+                        // by its rim out of the fingers (the Panda's, from behind the door).
                         let z = (PICK_PLACE_FLOOR - bottom + DROP_GAP).min(SIDE_RELEASE_Z);
-                        let spots = BIN2_SIDE_SPOTS.map(|[x, y]| Vector3::new(x, y, z) + held);
-                        self.first_clear(model, &spots, |e, t| {
+                        let options: Vec<([f64; 2], f64)> = CARRY_YAWS
+                            .iter()
+                            .flat_map(|&yaw| BIN2_SIDE_SPOTS.iter().map(move |&s| (s, yaw)))
+                            .collect();
+                        self.first_clear_straight(model, &options, |e, ([x, y], yaw)| {
+                            let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw);
+                            let (o, held) = (turn * o, turn * held);
+                            let t = Vector3::new(x, y, z) + held;
                             e.segment(model, Vector3::new(t.x, t.y, h), o, 2.0);
                             e.segment(model, t, o, 1.5);
                         });
@@ -852,6 +865,29 @@ impl Expert {
                 e.missed = false;
                 plan(e, option);
                 e.plan_clearance(model, from) - if e.missed { UNREACHED } else { 0.0 }
+            },
+            &plan,
+        );
+    }
+
+    /// As [`Expert::first_clear`], but an option along which some segment leaves its straight
+    /// line (a joint-space move, for a joint limit in the way) ranks [`UNLIFTABLE`] closer to
+    /// the arena.
+    fn first_clear_straight<T: Copy>(
+        &mut self,
+        model: &RobotModel,
+        options: &[T],
+        plan: impl Fn(&mut Self, T),
+    ) {
+        let from = self.plan.len();
+        self.first_with_gap(
+            options,
+            |e, option| {
+                (e.missed, e.straight) = (false, true);
+                plan(e, option);
+                let gap = e.plan_clearance(model, from);
+                let gap = if e.straight { gap } else { gap - UNLIFTABLE };
+                if e.missed { gap - UNREACHED } else { gap }
             },
             &plan,
         );
