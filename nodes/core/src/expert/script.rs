@@ -681,8 +681,18 @@ impl Expert {
                         } else {
                             [0.0, 0.0]
                         };
-                        let t = Vector3::new(cx + dx + held.x, cy + dy + held.y, h);
-                        self.segment(model, t, o, 2.0);
+                        let over = Vector3::new(cx + dx, cy + dy, h);
+                        if self.top_down() {
+                            self.segment(model, over + held.xy().push(0.0), o, 2.0);
+                        } else {
+                            // As into bin 2: turned about the vertical where the straight
+                            // carry would run into a joint limit.
+                            self.first_clear_straight(model, &CARRY_YAWS, |e, yaw| {
+                                let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw);
+                                let t = over + (turn * held).xy().push(0.0);
+                                e.segment(model, t, turn * o, 2.0);
+                            });
+                        }
                     }
                 }
             }
@@ -742,8 +752,10 @@ impl Expert {
                 match task.objective {
                     Objective::TrashCan if !self.top_down() => {
                         // The open fingers may still hold the dumbbell's upper disc: slide them
-                        // out level first (the object drops into the can), then rise.
-                        let level = Vector3::new(back.x, back.y, 0.0).normalize();
+                        // out level first (the object drops into the can), then rise — back
+                        // along the gripper's approach axis as it is turned now.
+                        let approach = self.orientation * Vector3::z();
+                        let level = -Vector3::new(approach.x, approach.y, 0.0).normalize();
                         let out = self.pad + level * 0.07;
                         self.segment(model, out, self.orientation, 1.0);
                         self.segment(model, out + Vector3::z() * 0.1, self.orientation, 1.0);
