@@ -870,16 +870,7 @@ impl Expert {
         options: &[T],
         plan: impl Fn(&mut Self, T),
     ) {
-        let from = self.plan.len();
-        self.first_with_gap(
-            options,
-            |e, option| {
-                e.missed = false;
-                plan(e, option);
-                e.plan_clearance(model, from) - if e.missed { UNREACHED } else { 0.0 }
-            },
-            &plan,
-        );
+        self.first_clear_ranked(model, options, false, plan);
     }
 
     /// As [`Expert::first_clear`], but an option along which some segment leaves its straight
@@ -891,6 +882,17 @@ impl Expert {
         options: &[T],
         plan: impl Fn(&mut Self, T),
     ) {
+        self.first_clear_ranked(model, options, true, plan);
+    }
+
+    /// [`Expert::first_clear`], with `straight_first` that of [`Expert::first_clear_straight`].
+    fn first_clear_ranked<T: Copy>(
+        &mut self,
+        model: &RobotModel,
+        options: &[T],
+        straight_first: bool,
+        plan: impl Fn(&mut Self, T),
+    ) {
         let from = self.plan.len();
         self.first_with_gap(
             options,
@@ -898,7 +900,11 @@ impl Expert {
                 (e.missed, e.straight) = (false, true);
                 plan(e, option);
                 let gap = e.plan_clearance(model, from);
-                let gap = if e.straight { gap } else { gap - UNLIFTABLE };
+                let gap = if e.straight || !straight_first {
+                    gap
+                } else {
+                    gap - UNLIFTABLE
+                };
                 if e.missed { gap - UNREACHED } else { gap }
             },
             &plan,
