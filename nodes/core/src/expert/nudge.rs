@@ -16,7 +16,7 @@ use super::grasp::{Grasp, gripper_orientation};
 
 /// The pads' gap while pushing (m): the fingers touch a round object about 2.4 cm either
 /// side of the push's line.
-pub(super) const NUDGE_GAP: f64 = 0.04;
+const NUDGE_GAP: f64 = 0.04;
 /// Half the fingers' depth along the push (m): the finger blades are 1 cm thick.
 const FINGER_HALF_DEPTH: f64 = 0.005;
 /// Half the fingertips' width across the push (m): the pads' inner faces are `NUDGE_GAP`
@@ -25,11 +25,11 @@ const FINGERTIP_HALF_WIDTH: f64 = 0.004;
 /// How far behind the contact the pushing starts (m).
 const NUDGE_BACKOFF: f64 = 0.05;
 /// The longest leg (m) before the push is aimed again.
-pub(super) const NUDGE_STEP: f64 = 0.05;
+const NUDGE_STEP: f64 = 0.05;
 /// How close to the goal (m, xy) the push stops (success is within 3 cm).
 const NUDGE_DONE: f64 = 0.01;
 /// How close to a point on the way (m, xy) the object counts as having passed it.
-pub(super) const VIA_PASSED: f64 = 0.025;
+const VIA_PASSED: f64 = 0.025;
 
 /// The pads' centre above the floor while pushing (m): the plate by its disc's rim (the
 /// disc spans 3.3–4.7 cm above the floor); the dumbbell by its discs (the lower one spans
@@ -43,7 +43,7 @@ fn pad_above_floor(object: Object) -> f64 {
 
 /// How far ahead of the pads' centre (m, along the push) a round object of radius `radius`
 /// sits when it touches both fingers.
-pub(super) fn contact_distance(radius: f64) -> f64 {
+fn contact_distance(radius: f64) -> f64 {
     let half_span = NUDGE_GAP / 2.0 + FINGERTIP_HALF_WIDTH;
     (radius * radius - half_span * half_span).max(0.0).sqrt() + FINGER_HALF_DEPTH
 }
@@ -53,8 +53,6 @@ const WALL_MARGIN: f64 = 0.015;
 /// How far (m) in front of the goal wall's line (beyond the object's radius) the object is
 /// turned round the wall's end.
 const TURN_BEFORE_WALL: f64 = 0.01;
-/// Bin 2's far wall (x, m): the object's edge stays a centimetre inside it.
-const BIN2_FAR_WALL_X: f64 = 0.29;
 
 /// Where the object is pushed through on its way from `position` to `goal` (xy), before the
 /// goal itself: with the goal wall in the way, a point in front of the wall's line from which
@@ -71,11 +69,15 @@ pub(super) fn route(
     if obstacle != Obstacle::GoalWall {
         return Vec::new();
     }
-    let (low, high) = arena_parts(Objective::Push, obstacle)
-        .into_iter()
-        .find(|p| p.name.starts_with("obstacle/"))
-        .expect("the goal wall")
-        .aabb();
+    let parts = arena_parts(Objective::Push, obstacle);
+    let solid = |name: &str| {
+        let part = parts.iter().find(|p| p.name.starts_with(name));
+        part.unwrap_or_else(|| panic!("no {name} in the Push arena"))
+            .aabb()
+    };
+    let (low, high) = solid("obstacle/");
+    // The object's edge stays a centimetre inside bin 2's far wall.
+    let far_wall_x = solid("bin2/wall_x+").0.x;
     let radius = object_geometry(object).horizontal_radius;
     let clear = radius + WALL_MARGIN;
     let clears = |from: Point2<f64>| path_gap(from, goal, &(low, high)) >= clear;
@@ -83,7 +85,7 @@ pub(super) fn route(
         return Vec::new();
     }
     let before = low.y - radius - TURN_BEFORE_WALL;
-    let last_x = BIN2_FAR_WALL_X - radius - 0.01;
+    let last_x = far_wall_x - radius - 0.01;
     let mut x = position.x.max(high.x);
     while x < last_x && !clears(Point2::new(x, before)) {
         x += 0.005;
@@ -97,8 +99,13 @@ pub(super) fn route(
     // Points already reached (pushed to one, about to turn) are passed.
     route
         .into_iter()
-        .skip_while(|via| (position.xy() - via).norm() < VIA_PASSED)
+        .skip_while(|via| passed(position, via))
         .collect()
+}
+
+/// Whether the object at `position` has passed the point `via` on its way.
+pub(super) fn passed(position: Point3<f64>, via: &Point2<f64>) -> bool {
+    (position.xy() - via).norm() < VIA_PASSED
 }
 
 /// The smallest horizontal distance (m) from the straight path `from` → `to` to the box with
@@ -117,7 +124,7 @@ fn path_gap(from: Point2<f64>, to: Point2<f64>, solid: &(Point3<f64>, Point3<f64
 }
 
 /// The direction (unit, horizontal) from the object to the goal; None once it is there.
-pub(super) fn heading(object: Point3<f64>, goal: Point2<f64>) -> Option<Vector3<f64>> {
+fn heading(object: Point3<f64>, goal: Point2<f64>) -> Option<Vector3<f64>> {
     let to_goal: Vector2<f64> = goal - object.xy();
     (to_goal.norm() > NUDGE_DONE).then(|| to_goal.normalize().push(0.0))
 }
@@ -274,7 +281,8 @@ mod tests {
                 let mut from = start.xy();
                 for w in via.iter().chain([&goal]) {
                     assert!(path_gap(from, *w, &wall) >= r + 0.01 - 1e-9, "{from} → {w}");
-                    assert!(w.x + r <= BIN2_FAR_WALL_X, "{w}");
+                    // Inside bin 2's far wall (x 0.29, facts §2.1).
+                    assert!(w.x + r <= 0.29, "{w}");
                     from = *w;
                 }
             }

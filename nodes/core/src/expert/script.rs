@@ -225,9 +225,6 @@ pub struct Expert {
     /// Whether every segment planned since this was last set follows its straight line (none
     /// needed a joint-space move, whose curved path can drag a held object over the floor).
     straight: bool,
-    /// Where the current grasp sets the object down, to be grasped again (Push with a side
-    /// grasp past an obstacle: no single heading keeps the arm clear of it all the way).
-    set_down: Option<[f64; 2]>,
     /// Whether the object has been set down and grasped again.
     regrasped: bool,
     /// Points a push without a grasp takes the object through before the goal.
@@ -252,7 +249,6 @@ impl Expert {
             lift_start_pad_z: 0.0,
             missed: false,
             straight: true,
-            set_down: None,
             regrasped: false,
             via: Vec::new(),
         }
@@ -283,9 +279,10 @@ impl Expert {
         if self.regrasped { REGRASP_PACE } else { 1.0 }
     }
 
-    /// Where a Push with a side grasp first sets the object down, to be grasped again: just
-    /// past the goal wall's free end. None once grasped again, for objects grasped from the
-    /// top, and where the object is pushed without a grasp.
+    /// Where the current grasp sets the object down, to be grasped again (Push with a side grasp
+    /// past the goal wall: no single heading keeps the wrist clear of it all the way): just past
+    /// the wall's free end. None once grasped again, for objects grasped from the top, and where
+    /// the object is pushed without a grasp.
     fn relocation(&self) -> Option<[f64; 2]> {
         let task = self.task;
         let side_grasped = matches!(task.object, Object::Plate | Object::Dumbbell);
@@ -314,11 +311,7 @@ impl Expert {
     /// now, the fingers' closing axis kept across the push; done once the object is at the goal.
     fn nudge_leg(&mut self, env: &Env, model: &RobotModel, object: Point3<f64>) {
         let (pad, _) = pads_at(model, &env.world().arm_positions());
-        if self
-            .via
-            .first()
-            .is_some_and(|v| (object.xy() - v).norm() < nudge::VIA_PASSED)
-        {
+        if self.via.first().is_some_and(|v| nudge::passed(object, v)) {
             self.via.remove(0);
         }
         let (target, u) = match nudge::leg(self.task.object, object, self.nudge_target(env), pad) {
@@ -389,7 +382,6 @@ impl Expert {
                 } else {
                     0.0
                 };
-                self.set_down = self.relocation();
                 let headings = if self.regrasped {
                     Headings::Regrasp
                 } else {
@@ -545,7 +537,7 @@ impl Expert {
                 // The pads relative to the object, so targets can name where the object goes.
                 let held = self.pad - object.coords;
                 match task.objective {
-                    Objective::Push if let Some([x, y]) = self.set_down => {
+                    Objective::Push if let Some([x, y]) = self.relocation() => {
                         // Round the goal wall's free end to the spot where the object is set
                         // down and grasped again.
                         let spot = Vector3::new(x, y, 0.0) + held;
@@ -706,7 +698,7 @@ impl Expert {
                 self.phase = Phase::Place;
                 let held = self.pad - object.coords;
                 match task.objective {
-                    _ if self.set_down.is_some() => {
+                    _ if self.relocation().is_some() => {
                         // Down to where it rested, pressed a little into the floor.
                         let z = self.grasp_object.z - SET_DOWN_PRESS + held.z;
                         let t = Vector3::new(self.pad.x, self.pad.y, z);
@@ -741,12 +733,16 @@ impl Expert {
             Phase::Place => {
                 self.phase = Phase::Release;
                 self.gripper = open();
-                self.hold(if self.set_down.is_some() { 0.4 } else { 0.8 });
+                self.hold(if self.relocation().is_some() {
+                    0.4
+                } else {
+                    0.8
+                });
             }
             Phase::Release => {
                 self.phase = Phase::Retreat;
                 let back = self.grasp.map_or(Vector3::zeros(), |g| -g.approach);
-                if self.set_down.is_some() {
+                if self.relocation().is_some() {
                     // Back out of the grasp and up, then grasp the object again.
                     let t = self.pad + back * 0.07 + Vector3::z() * 0.04;
                     self.segment(model, t, self.orientation, 1.0);
