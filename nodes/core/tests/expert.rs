@@ -104,3 +104,29 @@ fn the_expert_pushes_from_behind_the_door_without_a_grasp() {
         assert!(success, "{name}: the object never reached the goal");
     }
 }
+
+/// Into the shelf past the goal wall: where the arm would run into the wall (or rest on it)
+/// on every way through the shelf's front, the expert carries the object out past the shelf's
+/// end nearest the robot and slides it in through that end, the gripper pointing +x.
+#[test]
+fn the_expert_inserts_through_the_shelfs_near_end() {
+    use composuite_core::env::{Env, EnvConfig};
+    use composuite_core::expert::Expert;
+
+    for name in ["IIWA/box/goal_wall/shelf", "IIWA/dumbbell/goal_wall/shelf"] {
+        let task: TaskSpec = name.parse().unwrap();
+        let mut env = Env::new(task, EnvConfig::default());
+        env.reset(0).unwrap();
+        let mut expert = Expert::new(task);
+        let (mut beside_the_end, mut success) = (false, false);
+        while env.ended().is_none() {
+            let action = expert.act(&env);
+            success |= env.step(&action).unwrap().info.success;
+            // Level with the shelf's opening and its depth, outside its x −0.1 end.
+            let [x, y, z] = env.observation().object.position;
+            beside_the_end |= x < -0.1 && (0.14..0.34).contains(&y) && z > 0.95;
+        }
+        assert!(beside_the_end, "{name}: never beside the shelf's near end");
+        assert!(success, "{name}: the object never got into the shelf");
+    }
+}

@@ -38,6 +38,11 @@
 //! so the wrist behind the gripper passes under the shelf's top block. The lane in front of
 //! the shelf and a turn of the gripper about the vertical (swinging the wrist and forearm
 //! away from the walls) are chosen by the arm's clearance along the way in, slide included.
+//! Past the goal wall, where every way through the shelf's front runs the arm into the wall
+//! by more than 4 cm, the object may instead go in through the shelf's open end nearest the
+//! robot (x −0.1, where the goal wall ends too): carried over the wall to beside that end,
+//! the gripper level and pointing +x, and slid in along +x, wrist and forearm staying on the
+//! robot's side of the end.
 //!
 //! Pushing a side-grasped object past the goal wall takes two grasps: no single heading
 //! keeps the wrist (10–20 cm behind the pads, below the wall's top) clear all the way. The
