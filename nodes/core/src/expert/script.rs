@@ -102,8 +102,8 @@ const SHELF_SIDE_TARGET_Y: f64 = 0.25;
 /// How far (m) the object's edge stays outside the shelf's near end (x −0.1), and past the goal
 /// wall's end at the same x, before it goes in through that end.
 const SHELF_NEAR_END_CLEAR: f64 = 0.04;
-/// How far (m) the object's edge goes in past the shelf's near end: its origin then ends well
-/// inside the success band's x −0.1 bound, the gripper's housing still outside the end.
+/// How far past the shelf's near end (m) the object's origin goes in: to x −0.04, inside the
+/// success band's x −0.1 bound, with the gripper's housing still outside the end.
 const SHELF_NEAR_END_DEPTH: f64 = 0.06;
 /// How far (m) the arm may run into the arena on the best way through the shelf's front before
 /// the ways through its near end are tried. Goal-wall shelf tasks, 10 seeds, where the best
