@@ -26,9 +26,12 @@ const GLOBAL_SEEDS: usize = 24;
 /// Orientation error weight in the IK.
 const IK_ORIENTATION_WEIGHT: f64 = 0.5;
 
+/// The environment's control period (s): one planned action per step.
+pub(super) const CONTROL_PERIOD: f64 = 0.05;
+
 /// Control steps (50 ms) in `seconds`.
 pub(super) fn steps(seconds: f64) -> usize {
-    ((seconds / 0.05).round() as usize).max(1)
+    ((seconds / CONTROL_PERIOD).round() as usize).max(1)
 }
 
 /// The smoothstep time law: 0 → 1 with zero speed at both ends.
