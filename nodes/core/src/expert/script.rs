@@ -881,7 +881,7 @@ impl Expert {
         // from where the object then is.
         let near_end = |e: &mut Self, out_first: bool, trial: bool| {
             let from = e.plan.len();
-            let z = SHELF.position[2] + SHELF.z_offset - bottom + DROP_GAP + 0.01;
+            let z = shelf_side_release_z(bottom);
             let (mut reached, held) = e.shelf_near_end(model, h, held, z, (1.0, out_first));
             if !trial {
                 return 0.0;
@@ -959,9 +959,8 @@ impl Expert {
         let from = self.plan.len();
         let o = self.orientation;
         let radius = object_geometry(self.task.object).horizontal_radius;
-        let front = SHELF.position[1] - 2.0 * SHELF.y_size - radius - 0.03;
-        let board = SHELF.position[2] + SHELF.z_offset;
-        let z = board - bottom + DROP_GAP + 0.01;
+        let front = shelf_front_y() - radius - 0.03;
+        let z = shelf_side_release_z(bottom);
         // The gripper turns level on the way: pitched down, its wrist rides
         // above the pads and meets the shelf's top block before the object is
         // in (the object tilts with it, its far side up, well inside the
@@ -1028,7 +1027,7 @@ impl Expert {
             );
         } else {
             // Over the goal wall, to the corner of the shelf's front and near end.
-            let front = SHELF.position[1] - 2.0 * SHELF.y_size - extent - SHELF_NEAR_END_CLEAR;
+            let front = shelf_front_y() - extent - SHELF_NEAR_END_CLEAR;
             self.segment(model, Vector3::new(outside, front + held.y, h), turned, 2.5);
         }
         self.segment(model, Vector3::new(outside, y, z + held.z), turned, 2.0);
@@ -1353,7 +1352,7 @@ impl Expert {
             // over).
             let line_gap = self.path_clearance(model, &line);
             let joint_gap = self.path_clearance(model, &joint_path(&q0, &goal, n));
-            let seconds = n as f64 * 0.05;
+            let seconds = n as f64 * CONTROL_PERIOD;
             if !end_met || joint_gap >= line_gap.min(MIN_CLEARANCE) {
                 self.joint_move(goal, pad, orientation, seconds);
                 return;
@@ -1455,6 +1454,17 @@ fn near_end_ways(top_down: bool) -> Vec<ShelfWay> {
                 .map(move |&closing| ShelfWay::NearEnd { closing, out_first })
         })
         .collect()
+}
+
+/// y (m) of the shelf's front, the face towards the robot's bins.
+fn shelf_front_y() -> f64 {
+    SHELF.position[1] - 2.0 * SHELF.y_size
+}
+
+/// The height (m) of a side-grasped object's origin where it is let go in the shelf: its
+/// bottom (`bottom` below the origin) 2.5 cm above the board.
+fn shelf_side_release_z(bottom: f64) -> f64 {
+    SHELF.position[2] + SHELF.z_offset - bottom + DROP_GAP + 0.01
 }
 
 /// x (m) of the shelf's end nearest the robot.
