@@ -12,6 +12,7 @@ fn the_expert_solves_a_subset_of_tasks() {
         "Panda/box/object_door/pick_place",
         "IIWA/dumbbell/object_wall/pick_place",
         "Gen3/box/goal_wall/push",
+        "Jaco/box/goal_wall/push",
         "Jaco/box/object_door/trash_can",
         "Jaco/box/object_wall/push",
         "IIWA/box/object_wall/shelf",
@@ -21,6 +22,7 @@ fn the_expert_solves_a_subset_of_tasks() {
         "IIWA/plate/object_door/pick_place",
         "Jaco/plate/object_door/trash_can",
         "IIWA/dumbbell/no_obstacle/push",
+        "Gen3/dumbbell/object_wall/pick_place",
         "Panda/dumbbell/object_wall/shelf",
     ];
     let mut failures = Vec::new();
@@ -129,4 +131,14 @@ fn the_expert_inserts_through_the_shelfs_near_end() {
         assert!(beside_the_end, "{name}: never beside the shelf's near end");
         assert!(success, "{name}: the object never got into the shelf");
     }
+}
+
+/// Behind the object wall, the Gen3's dumbbell grasp pointing +y has a clear path but ends
+/// 5–6 cm short of the bar (the edge of its reach) and lands a finger on the disc: the expert
+/// passes over it for one the arm reaches, and the dumbbell gets into the shelf.
+#[test]
+fn the_expert_passes_over_grasps_the_arm_cannot_reach() {
+    let task: TaskSpec = "Gen3/dumbbell/object_wall/shelf".parse().unwrap();
+    let outcome = run_episode(task, 1);
+    assert!(outcome.success, "{outcome:?}");
 }
