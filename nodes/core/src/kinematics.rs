@@ -104,15 +104,7 @@ pub fn solve_ik(
         } else {
             0.0
         };
-        let mut jac = SMatrix::<f64, 6, ARM_DOF>::zeros();
-        for (j, joint) in model.joints.iter().enumerate().take(ARM_DOF) {
-            let frame = poses[joint.child];
-            let axis = frame.rotation * joint.axis;
-            let anchor = frame.translation.vector;
-            let lin = axis.cross(&(p - anchor));
-            jac.fixed_view_mut::<3, 1>(0, j).copy_from(&lin);
-            jac.fixed_view_mut::<3, 1>(3, j).copy_from(&(axis * w));
-        }
+        let jac = jacobian(model, &poses, &p, w);
         let mut err = SVector::<f64, 6>::zeros();
         err.fixed_rows_mut::<3>(0).copy_from(&e_pos);
         err.fixed_rows_mut::<3>(3).copy_from(&(e_rot * w));
@@ -127,6 +119,46 @@ pub fn solve_ik(
         }
     }
     result
+}
+
+/// The arm joints' Jacobian at the point `p` (world) of the last body: linear rows first, then
+/// the angular rows scaled by `angular_weight`. `poses` are [`body_poses`] at the joints.
+fn jacobian(
+    model: &RobotModel,
+    poses: &[Isometry3<f64>],
+    p: &Vector3<f64>,
+    angular_weight: f64,
+) -> SMatrix<f64, 6, ARM_DOF> {
+    let mut jac = SMatrix::<f64, 6, ARM_DOF>::zeros();
+    for (j, joint) in model.joints.iter().enumerate().take(ARM_DOF) {
+        let frame = poses[joint.child];
+        let axis = frame.rotation * joint.axis;
+        let anchor = frame.translation.vector;
+        jac.fixed_view_mut::<3, 1>(0, j)
+            .copy_from(&axis.cross(&(p - anchor)));
+        jac.fixed_view_mut::<3, 1>(3, j)
+            .copy_from(&(axis * angular_weight));
+    }
+    jac
+}
+
+/// The part of the joint motion `dq` that leaves the pose of `link` unchanged (to first order):
+/// `dq` projected onto the null space of the link's Jacobian at `q`. A 7-joint arm holding its
+/// gripper still can still swing its elbow: this is that swing. `None` for an unknown link.
+pub fn null_space_motion(
+    model: &RobotModel,
+    link: &str,
+    q: &[f64; ARM_DOF],
+    dq: &SVector<f64, ARM_DOF>,
+) -> Option<SVector<f64, ARM_DOF>> {
+    let (body, in_body) = *model.links.get(link)?;
+    let poses = body_poses(model, q, [0.0, 0.0]);
+    let p = (poses[body] * in_body).translation.vector;
+    let jac = jacobian(model, &poses, &p, 1.0);
+    // dq − J⁺ J dq, with a tiny damping so a singular pose does not blow up.
+    let jjt = jac * jac.transpose() + SMatrix::<f64, 6, 6>::identity() * 1e-9;
+    let task = jjt.lu().solve(&(jac * dq))?;
+    Some(dq - jac.transpose() * task)
 }
 
 /// A rotation whose z axis points along `z` and whose y axis is as close as possible to `y`.

@@ -560,3 +560,45 @@ fn the_grasp_rule_follows_the_reference() {
     assert!(!only(true, false, true, false).grasping(Object::Plate));
     assert!(!only(false, false, true, true).grasping(Object::Plate));
 }
+
+/// The null-space motion of the 7-joint arms keeps the grip site's pose (to first order) while
+/// the elbow still moves for most poses: what the expert swings the forearm off walls with.
+#[test]
+fn null_space_motion_holds_the_gripper_and_moves_the_elbow() {
+    use composuite_core::kinematics::{body_poses, link_pose, null_space_motion};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let eps = 1e-4;
+    for robot in Robot::all() {
+        let model = robot_model(robot);
+        let mut elbow_moves = 0;
+        for _ in 0..10 {
+            let q = random_q(robot, &mut rng);
+            let dq = nalgebra::SVector::<f64, ARM_DOF>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let swing = null_space_motion(model, "grip_site", &q, &dq).unwrap();
+            let norm = swing.norm();
+            assert!(norm > 1e-3, "{robot:?}: no null space at {q:?}");
+            let mut moved = q;
+            for j in 0..ARM_DOF {
+                moved[j] += eps * swing[j] / norm;
+            }
+            let a = link_pose(model, &q, "grip_site").unwrap();
+            let b = link_pose(model, &moved, "grip_site").unwrap();
+            let shift = (a.translation.vector - b.translation.vector).norm();
+            let turn = a.rotation.angle_to(&b.rotation);
+            assert!(
+                shift < 1e-3 * eps && turn < 1e-3 * eps,
+                "{robot:?}: the gripper moved {shift:.2e} m, {turn:.2e} rad"
+            );
+            // The elbow (body 4) moves ≥ 2 cm per radian of swing, unless the arm is near a
+            // pose where the swing only turns the wrist.
+            let elbow = |q: &[f64; ARM_DOF]| body_poses(model, q, [0.0, 0.0])[4].translation.vector;
+            if (elbow(&q) - elbow(&moved)).norm() > 0.02 * eps {
+                elbow_moves += 1;
+            }
+        }
+        assert!(
+            elbow_moves >= 5,
+            "{robot:?}: the elbow moved in {elbow_moves} of 10 poses"
+        );
+    }
+}

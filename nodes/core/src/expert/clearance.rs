@@ -21,6 +21,9 @@ struct Sphere {
     body: usize,
     centre: Point3<f64>,
     radius: f64,
+    /// Whether the body can move with the gripper held still: every link before the last
+    /// arm joint (not the hand and the fingers).
+    swings: bool,
 }
 
 /// An arena solid as an oriented box.
@@ -40,6 +43,10 @@ impl Clearance {
     /// The arm `model` in the arena of `objective` and `obstacle`.
     pub fn new(model: &RobotModel, objective: Objective, obstacle: Obstacle) -> Clearance {
         let mut spheres = Vec::new();
+        let hand: Vec<usize> = model.joints[ARM_DOF - 1..]
+            .iter()
+            .map(|j| j.child)
+            .collect();
         // Body 0 is the fixed base on its pedestal, far from everything.
         for (body, b) in model.bodies.iter().enumerate().skip(1) {
             for c in &b.collisions {
@@ -48,6 +55,7 @@ impl Clearance {
                         body,
                         centre: c.pose * centre,
                         radius,
+                        swings: !hand.contains(&body),
                     });
                 }
             }
@@ -58,6 +66,27 @@ impl Clearance {
             .map(solid)
             .collect();
         Clearance { spheres, solids }
+    }
+
+    /// How crowded the links that can swing with the gripper held still are at `q`: the sum over
+    /// their spheres of the square of how far each comes within `margin` (m) of the arena (0
+    /// when all keep `margin`). Smooth where the smallest gap is not, so its gradient still
+    /// points away from several solids close at once.
+    pub fn crowding(&self, model: &RobotModel, q: &[f64; ARM_DOF], margin: f64) -> f64 {
+        let poses = body_poses(model, q, [0.0, 0.0]);
+        self.spheres
+            .iter()
+            .filter(|s| s.swings)
+            .map(|s| {
+                let c = poses[s.body] * s.centre;
+                let gap = self
+                    .solids
+                    .iter()
+                    .map(|solid| box_distance(solid, &c) - s.radius)
+                    .fold(f64::INFINITY, f64::min);
+                (margin - gap).max(0.0).powi(2)
+            })
+            .sum()
     }
 
     /// The smallest gap (m) between the arm at `q` (fingers open) and the arena.

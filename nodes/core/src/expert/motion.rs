@@ -1,11 +1,12 @@
 //! Motion primitives: straight lines of the pads' centre turned into joint targets with the
 //! crate's IK, one per control step.
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{SVector, UnitQuaternion, Vector3};
 
 use std::f64::consts::PI;
 
-use crate::kinematics::{IkResult, IkTarget, solve_ik};
+use super::clearance::Clearance;
+use crate::kinematics::{IkResult, IkTarget, null_space_motion, solve_ik};
 use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel};
 
 /// The pads' centre is this far above the grip site along the gripper's approach axis (m):
@@ -66,6 +67,60 @@ pub(super) fn pad_ik(
         Some(r) => (r.q, met(&r)),
         None => (*q, false),
     }
+}
+
+/// How close (m) to the arena the arm may come before [`pad_ik_clear`] swings it away.
+const SWING_MARGIN: f64 = 0.03;
+/// The largest joint change (rad) of one swing step.
+const SWING_STEP: f64 = 0.02;
+/// Step (rad) of the finite differences of the crowding's gradient.
+const SWING_PROBE: f64 = 1e-4;
+
+/// [`pad_ik`], then the arm swung away from the arena in the IK's null space (the elbow of a
+/// 7-joint arm turns about the shoulder–wrist line with the gripper held still) by up to
+/// [`SWING_STEP`] where it comes within [`SWING_MARGIN`] of it. Called once per step of a
+/// straight line, the swings add up to keep the forearm off walls the gripper passes close to.
+pub(super) fn pad_ik_clear(
+    model: &RobotModel,
+    clearance: &Clearance,
+    q: &[f64; ARM_DOF],
+    pad: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> ([f64; ARM_DOF], bool) {
+    let (solved, met) = pad_ik(model, q, pad, orientation);
+    let crowding = clearance.crowding(model, &solved, SWING_MARGIN);
+    if !met || crowding == 0.0 {
+        return (solved, met);
+    }
+    let mut downhill = SVector::<f64, ARM_DOF>::zeros();
+    for j in 0..ARM_DOF {
+        let mut probe = solved;
+        probe[j] += SWING_PROBE;
+        downhill[j] = (crowding - clearance.crowding(model, &probe, SWING_MARGIN)) / SWING_PROBE;
+    }
+    let Some(swing) = null_space_motion(model, GRIP_SITE_LINK, &solved, &downhill) else {
+        return (solved, met);
+    };
+    let largest = swing.amax();
+    if largest < 1e-9 {
+        return (solved, met);
+    }
+    // Halve the step until it helps (the crowding is a sum of squares: a full step can
+    // overshoot where two parts are close).
+    let mut step = SWING_STEP / largest;
+    for _ in 0..4 {
+        let mut swung = solved;
+        for j in 0..ARM_DOF {
+            swung[j] += step * swing[j];
+        }
+        // Back onto the pose: the swing keeps it only to first order.
+        let (swung, swung_met) = pad_ik(model, &swung, pad, orientation);
+        if swung_met && clearance.crowding(model, &swung, SWING_MARGIN) < crowding {
+            return (swung, true);
+        }
+        step *= 0.5;
+    }
+    (solved, met)
 }
 
 /// Whether an IK result is close enough to its target to be tracked.
