@@ -77,29 +77,26 @@ impl Clearance {
         self.spheres
             .iter()
             .filter(|s| s.swings)
-            .map(|s| {
-                let c = poses[s.body] * s.centre;
-                let gap = self
-                    .solids
-                    .iter()
-                    .map(|solid| box_distance(solid, &c) - s.radius)
-                    .fold(f64::INFINITY, f64::min);
-                (margin - gap).max(0.0).powi(2)
-            })
+            .map(|s| (margin - self.sphere_gap(&poses, s)).max(0.0).powi(2))
             .sum()
     }
 
     /// The smallest gap (m) between the arm at `q` (fingers open) and the arena.
     pub fn at(&self, model: &RobotModel, q: &[f64; ARM_DOF]) -> f64 {
         let poses = body_poses(model, q, [0.0, 0.0]);
-        let mut gap = f64::INFINITY;
-        for s in &self.spheres {
-            let c = poses[s.body] * s.centre;
-            for solid in &self.solids {
-                gap = gap.min(box_distance(solid, &c) - s.radius);
-            }
-        }
-        gap
+        self.spheres
+            .iter()
+            .map(|s| self.sphere_gap(&poses, s))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The gap (m) between one sphere, its body at `poses`, and the nearest arena solid.
+    fn sphere_gap(&self, poses: &[Isometry3<f64>], s: &Sphere) -> f64 {
+        let c = poses[s.body] * s.centre;
+        self.solids
+            .iter()
+            .map(|solid| box_distance(solid, &c) - s.radius)
+            .fold(f64::INFINITY, f64::min)
     }
 }
 

@@ -50,8 +50,9 @@
 //! into the floor so a plate tilted in the grasp lands level); the second grasps it again,
 //! wrist towards the robot and +y (+x−y first), chosen by the clearance of its approach and
 //! of the carry to the goal, at a quicker pace. The dumbbell is carried just off the floor
-//! (higher, it tilts in the grasp and crosses the 0.9 m line that ends a Push episode). Over the trash can the open fingers slide out
-//! level before rising (they still hold the dumbbell's upper disc).
+//! (higher, it tilts in the grasp and crosses the 0.9 m line that ends a Push episode). Over
+//! the trash can the open fingers slide out level before rising (they still hold the
+//! dumbbell's upper disc).
 //!
 //! From behind the object wall and the door the plate and the dumbbell are pushed without a
 //! grasp ([`nudge`]): no side grasp keeps the low wrist off the wall (checked pose by pose),

@@ -1334,6 +1334,10 @@ impl Expert {
         let (p0, r0) = (self.pad, self.orientation);
         let q0 = self.q.expect("planned from a known pose");
         let mut n = steps(seconds);
+        // Pushing without a grasp, the fingers' way is the plan: no swinging the arm off the
+        // arena (round the goal wall the Panda's object slipped out at the turn: 0.1 → 0 on 2
+        // tasks).
+        let nudging = self.nudges();
         let (mut line, mut all_met, mut end_met);
         loop {
             let mut q = q0;
@@ -1343,9 +1347,7 @@ impl Expert {
             for k in 1..=n {
                 let s = smoothstep(k as f64 / n as f64);
                 let (to, turned) = (p0 + (pad - p0) * s, r0.slerp(&orientation, s));
-                // Pushing without a grasp, the fingers' way is the plan: no swinging (round the
-                // goal wall the Panda's object slipped out at the turn: 0.1 → 0 on 2 tasks).
-                let (next, met) = if self.nudges() {
+                let (next, met) = if nudging {
                     pad_ik(model, &q, to, turned)
                 } else {
                     pad_ik_clear(model, &self.clearance, &q, to, turned)
