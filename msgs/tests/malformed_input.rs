@@ -93,15 +93,25 @@ fn specific_errors_say_what_is_wrong() {
     assert_eq!(&bytes[count_at..count_at + 4], &1u32.to_le_bytes());
     bytes[count_at..count_at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
     let err = cdr::decode::<JointState>(&bytes).unwrap_err();
-    assert!(
-        matches!(
-            err,
-            CdrError::Malformed {
-                type_name: "sensor_msgs/msg/JointState",
-                ..
-            }
-        ),
-        "{err}"
+    // After the count: the name "joint_1" (4 + 8 bytes) and position, velocity, effort (4 + 4
+    // + 8, 4, 4 bytes: the f64 is 8-aligned).
+    assert_eq!(
+        err,
+        CdrError::Truncated {
+            type_name: "sensor_msgs/msg/JointState",
+            field: "name".into(),
+            shortfall: cdr::Shortfall::Sequence {
+                len: u32::MAX,
+                element_size: 4
+            },
+            needed: u64::from(u32::MAX) * 4,
+            remaining: 36,
+        }
+    );
+    assert_eq!(
+        err.to_string(),
+        "malformed sensor_msgs/msg/JointState: sequence `name` declares 4294967295 elements of at \
+         least 4 bytes each (17179869180 bytes), but only 36 bytes are left"
     );
 
     // Invalid UTF-8 in a string and a bool that is neither 0 nor 1.

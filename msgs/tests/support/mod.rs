@@ -1,6 +1,9 @@
-//! Shared by the tests and the `msg_probe` example: random message instances built from the
-//! static field descriptions, so every generated type is exercised the same way.
+//! Shared by the tests and the examples (`msg_probe`, `fuzz_cdr`): random message instances
+//! built from the static field descriptions, so every generated type is exercised the same way;
+//! the CDR decoder fuzzer (`fuzz`).
 #![allow(dead_code)]
+
+pub mod fuzz;
 
 use composuite_msgs::{
     ArrayKind, ElementType, FieldDescription, MessageVisitor, RosMessage, TypeDescription,
