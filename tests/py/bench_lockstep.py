@@ -25,6 +25,7 @@ import sys
 import threading
 import time
 
+import node_suite
 import ros_agent
 
 REFERENCE_TASKS = [
@@ -79,8 +80,9 @@ class RssSampler:
 def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: float = 0.0) -> dict:
     domain = random.randint(1, 200)
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    failed = False
     suite = subprocess.Popen(
-        [composuite, "launch", "--task", task, "--service-mapping", "cyclone",
+        [*node_suite.suite_launcher(), composuite, "launch", "--task", task, "--service-mapping", "cyclone",
          "--horizon", str(horizon), "--namespace", "/bench", "--log-level", os.environ.get("BENCH_LOG_LEVEL", "warn")],
         env=env, stderr=subprocess.PIPE, text=True)
     try:
@@ -126,6 +128,9 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: 
             wall = time.perf_counter() - t_start
             if sampler:
                 sampler.stop()
+    except BaseException:
+        failed = True
+        raise
     finally:
         suite.send_signal(signal.SIGINT)
         try:
@@ -133,8 +138,8 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: 
         except subprocess.TimeoutExpired:
             suite.kill()
             _, err = suite.communicate()
-        if suite.returncode != 0:
-            print(f"launch exited {suite.returncode}: {err[-2000:]}", file=sys.stderr)
+        if suite.returncode != 0 or failed:
+            print(f"launch exited {suite.returncode}: {err[-3000:]}", file=sys.stderr)
         # With BENCH_LOG_LEVEL=debug the sim reports where its step time goes.
         for line in err.splitlines():
             if "steps: physics" in line:

@@ -51,6 +51,23 @@ def env_replay_path() -> Path:
     return path
 
 
+def node_processes(marker: str, kind: str | None = None) -> list[int]:
+    """Pids of `composuite node KIND ...` processes (what `composuite launch` starts) whose command
+    line contains `marker` (e.g. `__ns:=/env_00`), of one `kind` if given."""
+    pids = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            args = (proc / "cmdline").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        line = b" ".join(args).decode(errors="replace")
+        if len(args) > 2 and args[1] == b"node" and marker in line and kind in (None, args[2].decode()):
+            pids.append(int(proc.name))
+    return pids
+
+
 def env_replay_run(episode: dict) -> list[dict]:
     """`env_replay run` on an episode description: one dict per step, step 0 (reset) first."""
     result = subprocess.run([str(env_replay_path()), "run"], input=json.dumps(episode),
@@ -85,11 +102,32 @@ def random_domain() -> int:
     return random.SystemRandom().randint(1, 200)
 
 
+# Two-host mode (tests/py/test_two_hosts.py): the name of the network namespace the suite's
+# processes are started in ("host a" of scripts/netns-pair); this process then runs on host b.
+SUITE_NETNS_VAR = "COMPOSUITE_SUITE_NETNS"
+
+
+def suite_launcher() -> list[str]:
+    """The command prefix that starts a suite process on the suite's host: nothing on one host,
+    `ip netns exec <host a>` in two-host mode (it execs, so the pid is the node's own)."""
+    netns = os.environ.get(SUITE_NETNS_VAR)
+    return ["ip", "netns", "exec", netns] if netns else []
+
+
 def require_isolation() -> None:
-    """Fail unless this process sees only the loopback interface (netns-isolate / netns-run)."""
+    """Fail unless this process sees only the loopback interface (netns-isolate / netns-run), or,
+    in two-host mode, loopback and host b's end of the scripts/netns-pair link; and no route
+    leads off the machine."""
     names = sorted(name for _, name in socket.if_nameindex())
-    if names != ["lo"]:
+    allowed = [["lo"], ["lo", "veth-b"]] if os.environ.get(SUITE_NETNS_VAR) else [["lo"]]
+    if names not in allowed:
         raise RuntimeError(f"DDS tests must run inside scripts/netns-isolate (interfaces here: {names})")
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.connect(("192.0.2.1", 7400))  # resolves a route, sends nothing
+        except OSError:
+            return
+    raise RuntimeError("DDS tests must not run where a route leads off the machine")
 
 
 class Suite:
@@ -114,7 +152,7 @@ class Suite:
         self.stderr_paths: dict[str, Path] = {}
         try:
             for node in NODES:
-                args = [str(binary(node)), "--ros-args", "-r", f"__ns:={namespace}"]
+                args = [*suite_launcher(), str(binary(node)), "--ros-args", "-r", f"__ns:={namespace}"]
                 for name, value in params.get(node, {}).items():
                     if isinstance(value, bool):
                         value = "true" if value else "false"
