@@ -33,21 +33,6 @@ def composuite() -> str:
     return str(exe)
 
 
-def node_processes(marker: str) -> list[int]:
-    """Pids of `composuite node` processes whose command line contains `marker`."""
-    pids = []
-    for proc in Path("/proc").iterdir():
-        if not proc.name.isdigit():
-            continue
-        try:
-            cmdline = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode()
-        except OSError:
-            continue
-        if " node " in cmdline and marker in cmdline:
-            pids.append(int(proc.name))
-    return pids
-
-
 def launch(*args: str, domain: int) -> subprocess.Popen:
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
     return subprocess.Popen([composuite(), "launch", *args], env=env,
@@ -76,32 +61,32 @@ def test_two_realtime_environments_run_and_stop_cleanly_on_sigterm():
             for ns in ("/lt/env_00", "/lt/env_01"):
                 for topic in ("joint_states", "observation", "reward", "episode", "scene"):
                     assert f"{ns}/{topic}" in topics, sorted(topics)
-        assert len(node_processes("__ns:=/lt/env_0")) == 6
+        assert len(node_suite.node_processes("__ns:=/lt/env_0")) == 6
     finally:
         suite.send_signal(signal.SIGTERM)
         _, err = suite.communicate(timeout=15)
     assert suite.returncode == 0, err
     assert "signal 15" in err
-    assert node_processes("__ns:=/lt/env_0") == [], "nodes left running"
+    assert node_suite.node_processes("__ns:=/lt/env_0") == [], "nodes left running"
 
 
-def test_a_dying_node_stops_the_suite_with_an_error():
+def test_a_dying_node_stops_the_suite_with_an_error_without_respawn():
     domain = random.randint(1, 200)
-    suite = launch("--namespace", "/die", "--log-level", "warn", domain=domain)
+    suite = launch("--namespace", "/die", "--respawn", "0", "--log-level", "warn", domain=domain)
     try:
         deadline = time.monotonic() + 20
-        while len(node_processes("__ns:=/die")) < 3:
+        while len(node_suite.node_processes("__ns:=/die")) < 3:
             assert time.monotonic() < deadline, "the three nodes did not start"
             time.sleep(0.1)
-        sim = [p for p in node_processes("__ns:=/die") if Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")[2] == b"sim"]
-        os.kill(sim[0], signal.SIGKILL)
+        (sim,) = node_suite.node_processes("__ns:=/die", "sim")
+        os.kill(sim, signal.SIGKILL)
         _, err = suite.communicate(timeout=15)
     finally:
         if suite.poll() is None:
             suite.kill()
     assert suite.returncode != 0
     assert "sim in /die exited on its own (killed by signal 9)" in err, err
-    assert node_processes("__ns:=/die") == []
+    assert node_suite.node_processes("__ns:=/die") == []
 
 
 def test_bad_launch_options_are_refused_with_the_valid_choices():
@@ -123,6 +108,22 @@ def node_defaults(binary: str) -> dict[str, str]:
                           check=True).stdout
     section = text.split("Parameters (default):")[1].split("Example:")[0]
     return {m.group(1): m.group(2) for m in re.finditer(r"^  (\w+) .*\((.*)\)$", section, re.M)}
+
+
+@pytest.mark.parametrize("args", [
+    ["tasks"], ["tasks", "--json"], ["tasks", "--split", "default", "--num-train", "56", "--seed", "0"],
+    ["--help"], ["expert", "--help"], ["bench", "--tasks", "IIWA/box/no_obstacle/pick_place", "--steps", "10"],
+])
+def test_a_closed_stdout_ends_any_subcommand_quietly(args):
+    """`composuite tasks | head -1`: the reader is gone before (or while) the command writes. The
+    command ends by SIGPIPE as a Unix filter does: no panic, no backtrace, nothing on stderr."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader has already gone: the first write meets a closed pipe
+    process = subprocess.Popen([composuite(), *args], stdout=write_end, stderr=subprocess.PIPE)
+    os.close(write_end)
+    _, err = process.communicate(timeout=120)
+    assert err == b"", err.decode(errors="replace")
+    assert process.returncode == -signal.SIGPIPE, process.returncode
 
 
 def test_params_file_holds_every_parameter_at_its_default():
@@ -279,9 +280,10 @@ def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
 def test_a_reply_written_before_the_clients_reader_exists_does_not_break_the_server():
     """A reset reply (~1.6 kB, with the related-sample-identity inline QoS every reply carries)
     written while the reply writer has matched no reader is fragmented at RustDDS' 1452-byte
-    fallback budget. RustDDS 0.15 writes such a DATA_FRAG one byte longer than it declares; with
-    RustDDS' debug assertions on, that panicked the task manager's DDS thread and the node went
-    deaf. Provoke exactly that (a request with no reply reader), then call reset properly."""
+    fallback budget. RustDDS 0.15.1 wrote such a DATA_FRAG one byte longer than it declared (the
+    patched copy in third_party/ does not); with its debug assertions on, that panicked the task
+    manager's DDS thread and the node went deaf. Provoke exactly that (a request with no reply
+    reader), then call reset properly."""
     from cyclonedds.pub import DataWriter
 
     with BareNodes("/frag", ("task_manager", "sim"), "-p", "service_mapping:=cyclone") as nodes, \

@@ -1,6 +1,7 @@
 //! `composuite launch`: the node suite headless. Every environment is the three nodes
 //! (task_manager, sim, reward) as child processes in a namespace of its own; signals are passed
-//! on, and when one node dies or time is up, every node is stopped (SIGINT, then SIGKILL after a
+//! on. A node that dies is started again (`--respawn`, like `respawn=True` in `ros2 launch`) up
+//! to a limit; past it, or when time is up, every node is stopped (SIGINT, then SIGKILL after a
 //! grace period) and the launcher exits with a code that says what happened.
 //!
 //! The children are this same executable run as `composuite node KIND --ros-args ...`, so the
@@ -66,12 +67,26 @@ pub struct LaunchArgs {
     /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
     #[arg(long)]
     duration: Option<f64>,
+    /// Start a node that dies again, at most this many times per node; 0: a dying node stops
+    /// the whole suite. A restarted node rejoins its environment: the step in flight is lost (the
+    /// agent times out on it) and the next reset starts a consistent episode.
+    #[arg(long, default_value_t = 3)]
+    respawn: u32,
+    /// Seconds between a node's death and its restart.
+    #[arg(long, default_value_t = 1.0)]
+    respawn_delay: f64,
 }
 
 struct Running {
     kind: NodeKind,
     namespace: String,
+    /// The `--ros-args` it was started with (and is started again with).
+    arguments: Vec<String>,
     child: Child,
+    /// Times it was started again.
+    restarts: u32,
+    /// When it died, while it waits for its restart.
+    died_at: Option<Instant>,
 }
 
 /// The namespace of environment `index` of `count`.
@@ -122,6 +137,12 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
         && !(d.is_finite() && d > 0.0)
     {
         return Err(format!("--duration {d} is invalid; seconds > 0"));
+    }
+    if !(args.respawn_delay.is_finite() && args.respawn_delay >= 0.0) {
+        return Err(format!(
+            "--respawn-delay {} is invalid; seconds >= 0",
+            args.respawn_delay
+        ));
     }
     if let Some(f) = &args.params_file
         && !f.is_file()
@@ -184,6 +205,7 @@ fn signal(child: &Child, signal: i32) {
 
 /// The nodes of a running suite (every environment's three).
 pub(crate) struct Suite {
+    exe: PathBuf,
     nodes: Vec<Running>,
 }
 
@@ -193,20 +215,22 @@ impl Suite {
         validate(args)?;
         let exe =
             std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
-        let mut suite = Suite { nodes: Vec::new() };
+        let mut suite = Suite {
+            exe,
+            nodes: Vec::new(),
+        };
         for index in 0..args.envs {
             let namespace = env_namespace(&args.namespace, index, args.envs);
             for kind in NodeKind::ALL {
-                let child = Command::new(&exe)
-                    .arg("node")
-                    .arg(kind.name())
-                    .args(node_arguments(args, kind, &namespace, index))
-                    .spawn();
-                match child {
+                let arguments = node_arguments(args, kind, &namespace, index);
+                match suite.spawn(kind, &arguments) {
                     Ok(child) => suite.nodes.push(Running {
                         kind,
                         namespace: namespace.clone(),
+                        arguments,
                         child,
+                        restarts: 0,
+                        died_at: None,
                     }),
                     Err(e) => {
                         suite.stop();
@@ -218,19 +242,56 @@ impl Suite {
         Ok(suite)
     }
 
+    fn spawn(&self, kind: NodeKind, arguments: &[String]) -> std::io::Result<Child> {
+        Command::new(&self.exe)
+            .arg("node")
+            .arg(kind.name())
+            .args(arguments)
+            .spawn()
+    }
+
     /// The first node that exited on its own, described.
     pub(crate) fn died(&mut self) -> Option<String> {
         self.nodes
             .iter_mut()
-            .find_map(|n| match n.child.try_wait() {
-                Ok(Some(status)) => Some(format!(
-                    "{} in {} exited on its own ({})",
-                    n.kind,
-                    n.namespace,
-                    describe(status)
-                )),
-                _ => None,
-            })
+            .find_map(|n| n.child.try_wait().ok().flatten().map(|s| n.death(s)))
+    }
+
+    /// Start again every node that died, `delay` after its death, at most `limit` times per
+    /// node. Err (the node's death, described) when one died once more than `limit` allows.
+    fn respawn(&mut self, limit: u32, delay: Duration) -> Result<(), String> {
+        let now = Instant::now();
+        for index in 0..self.nodes.len() {
+            let n = &mut self.nodes[index];
+            if n.died_at.is_none()
+                && let Ok(Some(status)) = n.child.try_wait()
+            {
+                let death = n.death(status);
+                if n.restarts >= limit {
+                    return Err(match limit {
+                        0 => death,
+                        _ => format!("{death}, after {limit} restart(s) (--respawn {limit})"),
+                    });
+                }
+                eprintln!(
+                    "composuite launch: {death}; starting it again in {:.1} s (restart {} of {limit})",
+                    delay.as_secs_f64(),
+                    n.restarts + 1
+                );
+                n.died_at = Some(now);
+            }
+            let n = &self.nodes[index];
+            if n.died_at.is_some_and(|t| now >= t + delay) {
+                let child = self.spawn(n.kind, &n.arguments).map_err(|e| {
+                    format!("cannot start {} in {} again: {e}", n.kind, n.namespace)
+                })?;
+                let n = &mut self.nodes[index];
+                n.child = child;
+                n.restarts += 1;
+                n.died_at = None;
+            }
+        }
+        Ok(())
     }
 
     /// Stop every node; true when all exited cleanly.
@@ -254,6 +315,8 @@ impl LaunchArgs {
             params_file: None,
             log_level: log_level.into(),
             duration: None,
+            respawn: 0,
+            respawn_delay: 1.0,
         }
     }
 }
@@ -279,7 +342,8 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
             eprintln!("composuite launch: --duration reached, stopping the nodes");
             break Ok(());
         }
-        if let Some(what) = suite.died() {
+        if let Err(what) = suite.respawn(args.respawn, Duration::from_secs_f64(args.respawn_delay))
+        {
             break Err(format!("{what}; stopped the others"));
         }
         std::thread::sleep(Duration::from_millis(50));
@@ -289,6 +353,18 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
         Err(e) => Err(e),
         Ok(()) if clean => Ok(()),
         Ok(()) => Err("some nodes did not shut down cleanly (see above)".into()),
+    }
+}
+
+impl Running {
+    /// "sim in /env_00 exited on its own (killed by signal 9)".
+    fn death(&self, status: ExitStatus) -> String {
+        format!(
+            "{} in {} exited on its own ({})",
+            self.kind,
+            self.namespace,
+            describe(status)
+        )
     }
 }
 
@@ -302,8 +378,9 @@ fn describe(status: ExitStatus) -> String {
 }
 
 /// SIGINT to every node still running, wait up to [`GRACE`], SIGKILL the rest. True when all
-/// exited with code 0.
+/// exited with code 0. (A node waiting for its restart is dead already, and was reported.)
 fn stop_all(nodes: &mut [Running]) -> bool {
+    let mut nodes: Vec<&mut Running> = nodes.iter_mut().filter(|n| n.died_at.is_none()).collect();
     for n in nodes.iter() {
         signal(&n.child, libc::SIGINT);
     }

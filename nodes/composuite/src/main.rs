@@ -38,6 +38,10 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
+    let node = std::env::args().nth(1).as_deref() == Some("node");
+    if !node {
+        end_quietly_when_stdout_closes();
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Node { kind, args } => {
@@ -63,5 +67,16 @@ fn main() -> std::process::ExitCode {
             eprintln!("composuite: {message}");
             std::process::ExitCode::from(2)
         }
+    }
+}
+
+/// A reader that stops early (`composuite tasks | head -1`) closes our stdout. Rust ignores
+/// SIGPIPE, so the next `println!` would panic with a backtrace; with the default action the
+/// command ends quietly, as every Unix filter does. Nodes keep Rust's behaviour: a node must not
+/// die because whoever watched its output went away.
+fn end_quietly_when_stdout_closes() {
+    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid action.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

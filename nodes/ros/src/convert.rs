@@ -28,6 +28,11 @@ pub fn time_from_nanos(nanos: u64) -> Time {
     }
 }
 
+/// A time as integer nanoseconds (negative times, which no stamp here has, count as 0).
+pub fn nanos_of(t: &Time) -> u64 {
+    (t.sec.max(0) as u64) * 1_000_000_000 + u64::from(t.nanosec)
+}
+
 /// A header in the world frame at `stamp`.
 pub fn header(stamp: Time) -> Header {
     Header {

@@ -2,7 +2,8 @@
 //! arm's driver and the reward node need.
 //!
 //! - `scene` (from the task manager) starts an episode: the world is rebuilt when the task
-//!   changes, then reset with the scene's seed;
+//!   changes, then reset with the scene's seed; the sim time goes on from the scene's stamp
+//!   if that is later (a restarted sim);
 //! - `joint_command` (absolute targets by joint name; may carry the finger joints) and
 //!   `gripper_command` (opening, effort) set the targets;
 //! - `lockstep` mode: each `joint_command` advances exactly one control period, and nothing
@@ -27,8 +28,8 @@ use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::std_msgs::msg::String as StringMsg;
 use composuite_msgs::tf2_msgs::msg::TFMessage;
 use futures::{FutureExt, StreamExt};
-use ros2_client::ParameterValue;
 use ros2_client::dds::Publisher;
+use ros2_client::{Gid, ParameterValue};
 
 use crate::convert;
 use crate::names;
@@ -100,6 +101,9 @@ struct Running {
     env: Env,
     /// The scene's episode number (the task manager counts episodes).
     episode: u32,
+    /// Who published that scene. A restarted task manager is another writer whose episode
+    /// numbers start again at 1: its scenes are new even where a number repeats.
+    scene_writer: Gid,
     /// Arm targets held between commands (realtime mode steps with them).
     arm_targets: [f64; ARM_DOF],
     /// A gripper command waiting for the next step.
@@ -198,8 +202,8 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                     }
                 }
                 scene = scenes.select_next_some() => match scene {
-                    Ok((scene, _)) => {
-                        sim.on_scene(&scene, &log);
+                    Ok((scene, info)) => {
+                        sim.on_scene(&scene, info.publisher_gid(), &log);
                         ticker = sim.ticker();
                     }
                     Err(err) => log.warn(format!("unreadable scene message dropped: {err:?}")),
@@ -248,7 +252,7 @@ impl Sim {
         }
     }
 
-    fn on_scene(&mut self, scene: &msg::Scene, log: &crate::node::Logger) {
+    fn on_scene(&mut self, scene: &msg::Scene, writer: Gid, log: &crate::node::Logger) {
         let task: TaskSpec = match convert::task_of(&scene.task) {
             Ok(task) => task,
             Err(err) => {
@@ -258,10 +262,14 @@ impl Sim {
         };
         if let Some(run) = &self.run
             && run.episode == scene.episode
+            && run.scene_writer == writer
             && run.env.task() == task
         {
             return; // the latched scene again (e.g. a re-match); nothing new
         }
+        // The scene carries the latest sim time the task manager has seen: a sim started again
+        // (after a crash) goes on from there instead of from 0, so time never runs backwards.
+        self.sim_time_ns = self.sim_time_ns.max(convert::nanos_of(&scene.header.stamp));
         let config = EnvConfig::default()
             .horizon(scene.horizon)
             .task_observation(self.task_observation);
@@ -287,6 +295,7 @@ impl Sim {
         self.run = Some(Running {
             env,
             episode: scene.episode,
+            scene_writer: writer,
             arm_targets,
             gripper: None,
             clamp_reported: BTreeSet::new(),

@@ -12,6 +12,7 @@ use composuite_core::TaskSpec;
 use composuite_core::env::{EnvConfig, EpisodeLayout, MAX_SEED};
 use composuite_core::reward::{staged_reward, termination};
 use composuite_core::sampling::{Experiment, sample_tasks};
+use composuite_msgs::builtin_interfaces::msg::Time;
 use composuite_msgs::msg;
 use composuite_msgs::srv;
 use futures::{FutureExt, StreamExt};
@@ -95,6 +96,9 @@ struct Episode {
     episode_return: f64,
     success_seen: bool,
     done: bool,
+    /// Whether the sim's step-0 observation of this episode arrived (a second one means the
+    /// sim was started again and lost the episode).
+    started: bool,
 }
 
 /// A reset waiting for the sim's first observation.
@@ -114,6 +118,9 @@ struct TaskManager {
     reset_timeout: Duration,
     current: Option<Episode>,
     pending: Vec<PendingReset>,
+    /// The latest sim time seen on `world_state` or `observation`; each scene carries it, so a
+    /// sim that was started again goes on from there.
+    sim_time: Time,
     scene: Publisher<msg::Scene>,
     status: Publisher<msg::EpisodeStatus>,
 }
@@ -147,6 +154,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         reset_timeout: Duration::from_secs_f64(node.param_f64("reset_timeout")),
         current: None,
         pending: Vec::new(),
+        sim_time: Default::default(),
         scene,
         status,
     };
@@ -253,7 +261,7 @@ impl TaskManager {
         self.next_seed = if seed >= MAX_SEED { 0 } else { seed + 1 };
         self.end_current(msg::EpisodeStatus::REASON_RESET, "a new episode started");
         let config = EnvConfig::default().horizon(self.horizon);
-        let scene = convert::scene(&layout, &config, number, convert::time_from_nanos(0));
+        let scene = convert::scene(&layout, &config, number, self.sim_time.clone());
         self.scene
             .publish(scene)
             .map_err(|e| format!("scene publish failed: {e:?}"))?;
@@ -267,6 +275,7 @@ impl TaskManager {
             episode_return: 0.0,
             success_seen: false,
             done: false,
+            started: false,
         });
         Ok((number, seed))
     }
@@ -283,7 +292,51 @@ impl TaskManager {
         }
     }
 
+    /// Note the sim time of a message from the sim. False when it is not later than the last
+    /// step counted of the current episode although it belongs to that episode: a sim started
+    /// again replays the episode from its start, and that must not be counted as its steps.
+    fn sim_time_goes_on(&mut self, episode: u32, step: u32, stamp: &Time) -> bool {
+        if convert::nanos_of(stamp) > convert::nanos_of(&self.sim_time) {
+            self.sim_time = stamp.clone();
+        }
+        match &self.current {
+            Some(ep) if ep.number == episode && step > 0 && ep.last_step > 0 => {
+                convert::nanos_of(stamp) > convert::nanos_of(&ep.last_header.stamp)
+            }
+            _ => true,
+        }
+    }
+
+    /// The sim lost the current episode (it was started again): end the episode with the reason,
+    /// and start the next one so that sim, reward and agents agree on the episode again. The
+    /// agent's step in flight never comes; its next reset goes on as usual.
+    fn sim_restarted(&mut self, what: &str, log: &Logger) {
+        let Some(number) = self.current.as_ref().map(|ep| ep.number) else {
+            return;
+        };
+        log.warn(format!(
+            "the sim was started again during episode {number} ({what}): that episode's state is lost; \
+             it ends here and a new episode starts"
+        ));
+        self.end_current(
+            msg::EpisodeStatus::REASON_RESET,
+            "the sim was started again; this episode's state was lost",
+        );
+        if let Err(err) = self.start_episode(None) {
+            log.error(format!(
+                "cannot start a new episode after the sim restart: {err}"
+            ));
+        }
+    }
+
     fn on_world_state(&mut self, w: &msg::WorldState, log: &Logger) {
+        if !self.sim_time_goes_on(w.episode, w.step, &w.header.stamp) {
+            self.sim_restarted(
+                &format!("world_state of step {} went back in sim time", w.step),
+                log,
+            );
+            return;
+        }
         let Some(ep) = &mut self.current else { return };
         if w.episode != ep.number || w.step == 0 || w.step <= ep.last_step || ep.done {
             return; // another episode's, the reset state, or already counted
@@ -400,8 +453,18 @@ impl TaskManager {
     }
 
     fn on_observation<S: ResetReplier>(&mut self, o: msg::Observation, server: &S, log: &Logger) {
+        self.sim_time_goes_on(o.episode, o.step, &o.header.stamp);
         if o.step != 0 {
             return;
+        }
+        if let Some(ep) = &mut self.current
+            && ep.number == o.episode
+        {
+            if ep.started {
+                self.sim_restarted("it published the episode's first observation again", log);
+                return;
+            }
+            ep.started = true;
         }
         let mut waiting = Vec::new();
         for p in self.pending.drain(..) {
