@@ -723,6 +723,68 @@ def reset_with_joint_states(reset: "ServiceClient", states: "Subscription", seed
     raise TimeoutError(f"no joint_states after {attempts} resets")
 
 
+def _stamp_ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+class LockstepClient:
+    """The agent's side of the lockstep protocol on one Agent: `reset(seed)` through the service,
+    then each `step(targets)` publishes joint_command and waits for that step's observation and
+    reward. Steps are matched on (episode, step) and on a stamp later than the reset's, since a
+    restarted task manager counts episodes from 1 again and a stamp never repeats.
+
+        client = LockstepClient(agent)
+        client.reset(seed=3)
+        observation = client.step([q + 0.01 for q in client.home])
+    """
+
+    ARM_JOINTS = 7
+
+    def __init__(self, agent: "Agent", service_format: str = "cyclone"):
+        self.agent = agent
+        self.states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
+        self.observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
+        self.rewards = agent.subscribe("reward", "composuite_msgs/msg/StagedReward")
+        self.command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
+        self.reset_client = agent.service_client("reset", "composuite_msgs/srv/Reset", service_format)
+        self.episode = self.step_count = self.since = None
+        self.names: list[str] = []
+        self.home: list[float] = []
+
+    def reset(self, seed: int) -> Any:
+        """Start an episode with `seed`; the reply. Sets `names` and `home` (the arm's joints and
+        their start positions, from the episode's first joint_states)."""
+        reply, first = reset_with_joint_states(self.reset_client, self.states, seed=seed)
+        self.started(reply, first)
+        return reply
+
+    def started(self, reply: Any, first: Any) -> None:
+        """Take `reply` (a successful reset) and its episode's first joint_states as the start."""
+        self.episode, self.step_count = reply.episode, 0
+        self.since = _stamp_ns(reply.observation.header.stamp)
+        self.names = list(first.name[:self.ARM_JOINTS])
+        self.home = list(first.position[:self.ARM_JOINTS])
+
+    def this_episode(self, step: int) -> Callable[[Any], bool]:
+        """A predicate: the message of `step` of the current episode."""
+        episode, since = self.episode, self.since
+
+        def match(message: Any) -> bool:
+            return message.episode == episode and message.step == step and _stamp_ns(message.header.stamp) > since
+        match.__name__ = f"episode {episode} step {step}"
+        return match
+
+    def step(self, targets: list[float], timeout: float = 5.0, reward: bool = True) -> Any:
+        """One lockstep step to `targets` (absolute arm joint positions); its observation."""
+        self.command.publish(name=self.names, position=[float(t) for t in targets])
+        self.step_count += 1
+        want = self.this_episode(self.step_count)
+        observation = self.observations.wait_for(want, timeout=timeout)
+        if reward:
+            self.rewards.wait_for(want, timeout=timeout)
+        return observation
+
+
 class Agent:
     """One DDS participant acting as a ROS 2 agent in a namespace.
 

@@ -22,7 +22,7 @@ import pytest
 
 import node_suite
 from node_suite import env_replay_run, float_bits, ns_of
-from ros_agent import Agent
+from ros_agent import Agent, LockstepClient
 
 TASK = "Gen3/box/object_wall/pick_place"
 STEP_TIMEOUT = 5.0
@@ -71,19 +71,14 @@ class Launched:
         assert node_suite.node_processes(f"__ns:={self.namespace}") == [], "nodes left running"
 
 
-class Stepper:
+class Stepper(LockstepClient):
     """A cyclonedds agent that keeps everything it receives, so a test can look at all of it."""
 
     def __init__(self, launched: Launched):
         self.launched = launched
-        self.agent = Agent(namespace=launched.namespace, domain_id=launched.domain)
-        self.observations = self.agent.subscribe("observation", "composuite_msgs/msg/Observation")
-        self.rewards = self.agent.subscribe("reward", "composuite_msgs/msg/StagedReward")
+        super().__init__(Agent(namespace=launched.namespace, domain_id=launched.domain))
         self.statuses = self.agent.subscribe("episode", "composuite_msgs/msg/EpisodeStatus")
-        self.states = self.agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
         self.scenes = self.agent.subscribe("scene", "composuite_msgs/msg/Scene", qos="latched")
-        self.command = self.agent.publisher("joint_command", "sensor_msgs/msg/JointState")
-        self.reset_client = self.agent.service_client("reset", "composuite_msgs/srv/Reset")
 
     def reset(self, seed: int, timeout: float = 30.0):
         """Reset until the suite answers with success and the episode's joint_states arrive (a
@@ -103,36 +98,19 @@ class Stepper:
                 first = self.states.wait_for({"header.stamp": reply.observation.header.stamp}, timeout=2)
             except TimeoutError:
                 continue
-            self.episode, self.step_count, self.seed = reply.episode, 0, seed
-            # What this episode publishes is stamped after its step 0. (A restarted task manager
-            # counts episodes from 1 again, so an (episode, step) pair may repeat one from before
-            # it; a stamp never repeats.)
-            self.since = ns_of(reply.observation.header.stamp)
-            self.names, self.home = list(first.name[:7]), list(first.position[:7])
-            self.stepped, self.commands = [reply.observation], []
+            self.started(reply, first)
+            self.seed, self.stepped, self.commands = seed, [reply.observation], []
             self.rng = random.Random(seed)
             return reply
         raise AssertionError(f"no successful reset within {timeout} s (last: {last})\n"
                              f"{self.launched.text()[-4000:]}")
 
-    def step(self) -> None:
+    def random_step(self) -> None:
+        """A step to random targets near the start pose, kept for the comparison."""
         targets = [round(q + self.rng.uniform(-0.15, 0.15), 6) for q in self.home]
-        self.command.publish(name=self.names, position=targets)
-        self.step_count += 1
-        want = self.this_episode(self.step_count)
-        observation = self.observations.wait_for(want, timeout=STEP_TIMEOUT)
-        self.rewards.wait_for(want, timeout=STEP_TIMEOUT)
+        observation = super().step(targets, timeout=STEP_TIMEOUT)
         self.commands.append({"joints": targets, "gripper": None})
         self.stepped.append(observation)
-
-    def this_episode(self, step: int):
-        """A predicate: the message of `step` of the current episode."""
-        episode, since = self.episode, self.since
-
-        def match(m) -> bool:
-            return m.episode == episode and m.step == step and ns_of(m.header.stamp) > since
-        match.__name__ = f"episode {episode} step {step}"
-        return match
 
     def assert_like_the_reference(self) -> None:
         replay = env_replay_run({"task": TASK, "seed": self.seed, "commands": self.commands})
@@ -151,7 +129,7 @@ class Stepper:
         for _ in range(attempts):
             self.reset(seed=0)
             try:
-                self.step()
+                self.random_step()
                 self.statuses.wait_for(self.this_episode(1), timeout=1)
                 return
             except TimeoutError:
@@ -181,7 +159,7 @@ def run_then_kill(stepper: Stepper, launched: Launched, kind: str) -> int:
     """An episode of 10 steps, then `kind` killed; the largest stamp seen before."""
     stepper.reset(seed=5)
     for _ in range(10):
-        stepper.step()
+        stepper.random_step()
     before = max(ns_of(o.header.stamp) for o in stepper.observations.samples)
     launched.kill_node(kind)
     launched.wait_for_log(f"{kind} in {launched.namespace} exited on its own (killed by signal 9); "
@@ -196,12 +174,14 @@ def recovers(stepper: Stepper, before_ns: int) -> None:
     stepper.warm_up()
     stepper.reset(seed=8)
     for _ in range(30):
-        stepper.step()
+        stepper.random_step()
     stepper.assert_like_the_reference()
     # Time went on from before the crash, and the scene agrees with the episode stepped.
     assert all(ns_of(o.header.stamp) > before_ns for o in stepper.stepped)
-    scene = stepper.scenes.wait_for({"episode": stepper.episode}, timeout=STEP_TIMEOUT)
-    assert scene.seed == 8 and scene.task.robot == TASK.split("/")[0]
+    # The scene is latched: the latest one received is the episode being stepped. (Not "the
+    # first with this episode number": a restarted task manager counts from 1 again.)
+    scene = stepper.scenes.samples[-1]
+    assert (scene.episode, scene.seed, scene.task.robot) == (stepper.episode, 8, TASK.split("/")[0])
 
 
 def test_a_killed_sim_is_started_again_and_a_reset_brings_the_environment_back(launched, stepper):
@@ -209,7 +189,7 @@ def test_a_killed_sim_is_started_again_and_a_reset_brings_the_environment_back(l
     lost = stepper.episode
     # The step in flight: no sim to take it. The wait names the step it waited for.
     with pytest.raises(TimeoutError, match=rf"episode {stepper.episode} step {stepper.step_count + 1}"):
-        stepper.step()
+        stepper.random_step()
     recovers(stepper, before)
     assert stepper.episode > lost  # the task manager lived on: its count goes on
     # Never mixed: after the crash, the lost episode shows at most its step 0 again, bit for bit
@@ -240,20 +220,15 @@ def test_a_killed_reward_node_is_started_again_and_rewards_follow_the_next_reset
 
 AGENT = textwrap.dedent("""
     import random, sys
-    from ros_agent import Agent, reset_with_joint_states
+    from ros_agent import Agent, LockstepClient
     namespace, domain = sys.argv[1], int(sys.argv[2])
     with Agent(namespace=namespace, domain_id=domain) as agent:
-        states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
-        observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
-        command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
-        reset = agent.service_client("reset", "composuite_msgs/srv/Reset")
-        reply, first = reset_with_joint_states(reset, states, seed=2)
-        command.wait_for_subscribers(1, timeout=20)
+        client = LockstepClient(agent)
+        client.reset(seed=2)
+        client.command.wait_for_subscribers(1, timeout=20)
         rng = random.Random(0)
         for k in range(1, 1000):
-            command.publish(name=list(first.name[:7]),
-                            position=[q + rng.uniform(-0.1, 0.1) for q in first.position[:7]])
-            observations.wait_for({"episode": reply.episode, "step": k}, timeout=10)
+            client.step([q + rng.uniform(-0.1, 0.1) for q in client.home], timeout=10, reward=False)
             print(k, flush=True)
 """)
 
@@ -272,7 +247,7 @@ def test_an_agent_killed_mid_episode_leaves_the_suite_serving_the_next(launched,
             first_agent.kill()
     stepper.reset(seed=8)
     for _ in range(30):
-        stepper.step()
+        stepper.random_step()
     stepper.assert_like_the_reference()
     assert launched.process.poll() is None
     assert "exited on its own" not in launched.text()

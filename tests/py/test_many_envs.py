@@ -16,7 +16,7 @@ import pytest
 
 import node_suite
 from node_suite import env_replay_run, float_bits
-from ros_agent import Agent, reset_with_joint_states
+from ros_agent import Agent, LockstepClient
 
 ENVS = 4
 NAMESPACE = "/many"
@@ -56,45 +56,34 @@ def launched(tmp_path_factory):
     assert code == 0, f"launch exited {code}:\n{log.read_text(errors='replace')[-3000:]}"
 
 
-class EnvAgent:
+class EnvAgent(LockstepClient):
     """One agent of the vector: its own participant in its environment's namespace."""
 
     def __init__(self, index: int, domain: int):
         self.index, self.task, self.seed = index, TASKS[index], 100 + index
         self.namespace = f"{NAMESPACE}/env_{index:02d}"
-        self.agent = Agent(namespace=self.namespace, domain_id=domain)
-        self.observations = self.agent.subscribe("observation", "composuite_msgs/msg/Observation")
-        self.rewards = self.agent.subscribe("reward", "composuite_msgs/msg/StagedReward")
-        self.states = self.agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
-        self.command = self.agent.publisher("joint_command", "sensor_msgs/msg/JointState")
+        super().__init__(Agent(namespace=self.namespace, domain_id=domain))
         self.set_task = self.agent.service_client("set_task", "composuite_msgs/srv/SetTask")
-        self.reset = self.agent.service_client("reset", "composuite_msgs/srv/Reset")
         self.error: BaseException | None = None
         self.commands: list[dict] = []
         self.stepped: list = []
 
     def run(self, start: threading.Barrier) -> None:
         try:
-            for client in (self.set_task, self.reset):
+            for client in (self.set_task, self.reset_client):
                 client.wait_for_service(timeout=30)
             self.command.wait_for_subscribers(timeout=30)
             robot, obj, obstacle, objective = self.task.split("/")
             answer = self.set_task.call(robot=robot, object=obj, obstacle=obstacle, objective=objective,
                                         timeout=10)
             assert answer.success, answer.message
-            reply, first = reset_with_joint_states(self.reset, self.states, seed=self.seed)
-            self.episode, names = reply.episode, list(first.name[:7])
-            self.stepped = [reply.observation]
+            self.stepped = [self.reset(seed=self.seed).observation]
             rng = random.Random(self.index)
-            home = list(first.position[:7])
             start.wait(timeout=60)  # all four step at the same time
-            for k in range(1, STEPS + 1):
-                targets = [round(q + rng.uniform(-0.2, 0.2), 6) for q in home]
-                self.command.publish(name=names, position=targets)
+            for _ in range(STEPS):
+                targets = [round(q + rng.uniform(-0.2, 0.2), 6) for q in self.home]
+                self.stepped.append(self.step(targets, timeout=STEP_TIMEOUT))
                 self.commands.append({"joints": targets, "gripper": None})
-                want = {"episode": self.episode, "step": k}
-                self.stepped.append(self.observations.wait_for(want, timeout=STEP_TIMEOUT))
-                self.rewards.wait_for(want, timeout=STEP_TIMEOUT)
         except BaseException as error:  # reported by the test thread
             self.error = error
             start.abort()

@@ -12,7 +12,7 @@ import struct
 
 import node_suite
 from node_suite import env_replay_run, float_bits
-from ros_agent import Agent, reset_with_joint_states
+from ros_agent import Agent, LockstepClient
 
 DISCOVERY_GROUP = "239.255.0.1"
 # RTPS 2.x well-known ports: PB + DG * domain (+ d1 for user multicast; + d0/d3 + PG * participant
@@ -90,19 +90,14 @@ def test_garbage_datagrams_on_every_port_crash_no_node(tmp_path):
         suite.assert_running()
         # Still answering, and still right.
         with Agent(namespace="/fuzz", domain_id=domain) as agent:
-            states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
-            observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
-            command = agent.publisher("joint_command", "sensor_msgs/msg/JointState")
-            reset = agent.service_client("reset", "composuite_msgs/srv/Reset")
-            reply, first = reset_with_joint_states(reset, states, seed=6)
-            command.wait_for_subscribers(1, timeout=20)
-            names, home = list(first.name[:7]), list(first.position[:7])
+            client = LockstepClient(agent)
+            reply = client.reset(seed=6)
+            client.command.wait_for_subscribers(1, timeout=20)
             steps, commands = [reply.observation], []
             for k in range(1, 21):
-                targets = [round(q + 0.01 * k, 6) for q in home]
-                command.publish(name=names, position=targets)
+                targets = [round(q + 0.01 * k, 6) for q in client.home]
+                steps.append(client.step(targets, timeout=10, reward=False))
                 commands.append({"joints": targets, "gripper": None})
-                steps.append(observations.wait_for({"episode": reply.episode, "step": k}, timeout=10))
         replay = env_replay_run({"task": task, "seed": 6, "commands": commands})
         assert [float_bits(o.flat) for o in steps] == [float_bits(r["flat"]) for r in replay]
         suite.assert_running()
