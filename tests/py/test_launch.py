@@ -89,6 +89,38 @@ def test_a_dying_node_stops_the_suite_with_an_error_without_respawn():
     assert node_suite.node_processes("__ns:=/die") == []
 
 
+def test_a_node_is_started_again_up_to_the_respawn_limit_then_the_suite_stops():
+    domain = random.randint(1, 200)
+    suite = launch("--namespace", "/again", "--respawn", "1", "--respawn-delay", "0.2", "--log-level", "warn",
+                   domain=domain)
+
+    def the_sim() -> int:
+        deadline = time.monotonic() + 20
+        while True:
+            pids = node_suite.node_processes("__ns:=/again", "sim")
+            if pids:
+                return pids[0]
+            assert time.monotonic() < deadline and suite.poll() is None, "no sim running"
+            time.sleep(0.05)
+
+    try:
+        first = the_sim()
+        os.kill(first, signal.SIGKILL)
+        deadline = time.monotonic() + 20
+        while (second := the_sim()) == first:
+            assert time.monotonic() < deadline, "the sim was not started again"
+            time.sleep(0.05)
+        os.kill(second, signal.SIGKILL)  # one death more than --respawn 1 allows
+        _, err = suite.communicate(timeout=20)
+    finally:
+        if suite.poll() is None:
+            suite.kill()
+    assert "sim in /again exited on its own (killed by signal 9); starting it again in 0.2 s (restart 1 of 1)" in err
+    assert "after 1 restart(s) (--respawn 1); stopped the others" in err, err
+    assert suite.returncode != 0
+    assert node_suite.node_processes("__ns:=/again") == []
+
+
 def test_bad_launch_options_are_refused_with_the_valid_choices():
     for args, expected in [
         (["--task", "IIWA/box/no_obstacle/fly"], "valid: pick_place, push, trash_can, shelf"),
@@ -96,6 +128,7 @@ def test_bad_launch_options_are_refused_with_the_valid_choices():
         (["--service-mapping", "zenoh"], "valid: fastdds"),
         (["--namespace", "env"], "must be absolute"),
         (["--envs", "0"], "valid: 1 to 100"),
+        (["--respawn-delay", "nan"], "--respawn-delay NaN is invalid; seconds >= 0"),
     ]:
         result = subprocess.run([composuite(), "launch", *args], capture_output=True, text=True, timeout=20)
         assert result.returncode == 2, (args, result.stderr)
