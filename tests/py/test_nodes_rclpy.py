@@ -9,7 +9,7 @@ PyPI wheels), with composuite_msgs colcon-built for it; services in the Fast DDS
   bit-identical to the in-process reference (env_replay);
 - node parameters through the parameter services (rcl_interfaces).
 
-rclpy 7.1.6 pitfalls avoided (../shared/reference/rclpy-agent-facts.md): a private Context, an own
+rclpy 7.1.6 pitfalls avoided: a private Context, an own
 SingleThreadedExecutor polled with spin_once and wall-clock deadlines, no
 spin_until_future_complete with service futures, no EventsExecutor.
 Only run inside scripts/netns-isolate."""
