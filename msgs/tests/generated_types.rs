@@ -156,7 +156,8 @@ fn names_follow_ros_2_conventions() {
 #[test]
 fn jazzy_type_hashes_pinned() {
     use composuite_msgs::{
-        builtin_interfaces, geometry_msgs, rosgraph_msgs, sensor_msgs, service_msgs, std_msgs,
+        builtin_interfaces, geometry_msgs, rcl_interfaces, rosgraph_msgs, sensor_msgs,
+        service_msgs, std_msgs,
     };
     let pins = [
         (
@@ -182,6 +183,23 @@ fn jazzy_type_hashes_pinned() {
         (
             rosgraph_msgs::msg::Clock::TYPE_HASH,
             "692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564",
+        ),
+        // What every node publishes on /rosout and /parameter_events (recorded by `-a`).
+        (
+            rcl_interfaces::msg::Log::TYPE_HASH,
+            "e28ce254ca8abc06abf92773b74602cdbf116ed34fbaf294fb9f81da9f318eac",
+        ),
+        (
+            rcl_interfaces::msg::ParameterEvent::TYPE_HASH,
+            "043e627780fcad87a22d225bc2a037361dba713fca6a6b9f4b869a5aa0393204",
+        ),
+        (
+            rcl_interfaces::msg::Parameter::TYPE_HASH,
+            "ddfe6442cffc462317adb5c92536a7b6dd55858c5c3e1e328165a6b73c2831af",
+        ),
+        (
+            rcl_interfaces::msg::ParameterValue::TYPE_HASH,
+            "115fc089a387e23c7ecd3525c9189c379109119d6ab82e8dfbde0fdf6a7f9b68",
         ),
         // `char[16]` hashes as uint8[16] in Jazzy.
         (

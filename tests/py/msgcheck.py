@@ -116,8 +116,9 @@ def canonical_base(base: str, value):
         return bool(value)
     if base == "string":
         return str(value)
-    if base == "char":
-        # An octet in ROS 2; mcap_ros2 reads it as a signed int8, so compare the byte.
+    if base in ("char", "byte"):
+        # Octets in ROS 2; mcap_ros2 reads char and rosbags reads byte as a signed int8, so
+        # compare the byte.
         return int(value) & 0xFF
     return int(value)
 

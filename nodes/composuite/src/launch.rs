@@ -75,6 +75,20 @@ pub struct LaunchArgs {
     /// Seconds between a node's death and its restart.
     #[arg(long, default_value_t = 1.0)]
     respawn_delay: f64,
+    /// Record every topic of the graph into this new rosbag2 directory (MCAP), as
+    /// `ros2 bag record -a -s mcap -o DIR` would: the recorder node starts first and closes the
+    /// bag last. If it dies, the suite keeps running without it.
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
+    /// With --record: record only topics whose full name matches this regex.
+    #[arg(long, value_name = "REGEX", requires = "record")]
+    record_regex: Option<String>,
+    /// With --record: never record topics whose full name matches this regex.
+    #[arg(long, value_name = "REGEX", requires = "record")]
+    record_exclude: Option<String>,
+    /// With --record: start a new bag file every this many bytes (like --max-bag-size).
+    #[arg(long, value_name = "BYTES", requires = "record")]
+    record_max_bag_size: Option<u64>,
 }
 
 struct Running {
@@ -87,6 +101,8 @@ struct Running {
     restarts: u32,
     /// When it died, while it waits for its restart.
     died_at: Option<Instant>,
+    /// Dead for good (a recorder is never restarted: its bag exists).
+    gone: bool,
 }
 
 /// The namespace of environment `index` of `count`.
@@ -144,6 +160,22 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
             args.respawn_delay
         ));
     }
+    if let Some(dir) = &args.record
+        && dir.exists()
+    {
+        return Err(format!(
+            "--record {}: it exists already; give a new directory (a bag is never overwritten)",
+            dir.display()
+        ));
+    }
+    for (flag, regex) in [
+        ("--record-regex", &args.record_regex),
+        ("--record-exclude", &args.record_exclude),
+    ] {
+        if let Some(r) = regex {
+            regex::Regex::new(r).map_err(|e| format!("{flag}: not a regex: {e}"))?;
+        }
+    }
     if let Some(f) = &args.params_file
         && !f.is_file()
     {
@@ -190,6 +222,21 @@ fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usi
             }
         }
         NodeKind::Reward => {}
+        NodeKind::Recorder => {
+            if let Some(dir) = &args.record {
+                param("output", dir.display().to_string());
+            }
+            match &args.record_regex {
+                Some(r) => param("regex", r.clone()),
+                None => param("all", "true".into()),
+            }
+            if let Some(r) = &args.record_exclude {
+                param("exclude_regex", r.clone());
+            }
+            if let Some(size) = args.record_max_bag_size {
+                param("max_bag_size", size.to_string());
+            }
+        }
     }
     out.extend(["--log-level".into(), args.log_level.clone()]);
     out
@@ -219,27 +266,50 @@ impl Suite {
             exe,
             nodes: Vec::new(),
         };
+        // The recorder first, so it hears the environments from their first message.
+        if args.record.is_some() {
+            let namespace = env_namespace(&args.namespace, 0, 1);
+            suite.add(
+                NodeKind::Recorder,
+                namespace,
+                node_arguments(args, NodeKind::Recorder, "/", 0),
+            )?;
+        }
         for index in 0..args.envs {
             let namespace = env_namespace(&args.namespace, index, args.envs);
             for kind in NodeKind::ALL {
                 let arguments = node_arguments(args, kind, &namespace, index);
-                match suite.spawn(kind, &arguments) {
-                    Ok(child) => suite.nodes.push(Running {
-                        kind,
-                        namespace: namespace.clone(),
-                        arguments,
-                        child,
-                        restarts: 0,
-                        died_at: None,
-                    }),
-                    Err(e) => {
-                        suite.stop();
-                        return Err(format!("cannot start {kind} in {namespace}: {e}"));
-                    }
-                }
+                suite.add(kind, namespace.clone(), arguments)?;
             }
         }
         Ok(suite)
+    }
+
+    /// Start one node; on failure stop the ones started and say why.
+    fn add(
+        &mut self,
+        kind: NodeKind,
+        namespace: String,
+        arguments: Vec<String>,
+    ) -> Result<(), String> {
+        match self.spawn(kind, &arguments) {
+            Ok(child) => {
+                self.nodes.push(Running {
+                    kind,
+                    namespace,
+                    arguments,
+                    child,
+                    restarts: 0,
+                    died_at: None,
+                    gone: false,
+                });
+                Ok(())
+            }
+            Err(e) => {
+                stop_all(&mut self.nodes);
+                Err(format!("cannot start {kind} in {namespace}: {e}"))
+            }
+        }
     }
 
     fn spawn(&self, kind: NodeKind, arguments: &[String]) -> std::io::Result<Child> {
@@ -267,6 +337,14 @@ impl Suite {
                 && let Ok(Some(status)) = n.child.try_wait()
             {
                 let death = n.death(status);
+                if n.kind == NodeKind::Recorder {
+                    // Its bag directory exists now, so it cannot start again; the
+                    // environments go on (what it wrote stays readable, see `bag reindex`).
+                    eprintln!("composuite launch: {death}; the suite goes on without recording");
+                    n.died_at = Some(now);
+                    n.gone = true;
+                    continue;
+                }
                 if n.restarts >= limit {
                     return Err(match limit {
                         0 => death,
@@ -281,7 +359,7 @@ impl Suite {
                 n.died_at = Some(now);
             }
             let n = &self.nodes[index];
-            if n.died_at.is_some_and(|t| now >= t + delay) {
+            if !n.gone && n.died_at.is_some_and(|t| now >= t + delay) {
                 let child = self.spawn(n.kind, &n.arguments).map_err(|e| {
                     format!("cannot start {} in {} again: {e}", n.kind, n.namespace)
                 })?;
@@ -317,6 +395,10 @@ impl LaunchArgs {
             duration: None,
             respawn: 0,
             respawn_delay: 1.0,
+            record: None,
+            record_regex: None,
+            record_exclude: None,
+            record_max_bag_size: None,
         }
     }
 }
@@ -327,8 +409,12 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot watch for signals: {e}"))?;
     let mut suite = Suite::start(args)?;
     eprintln!(
-        "composuite launch: {} environment(s) × 3 nodes started; Ctrl-C stops them",
-        args.envs
+        "composuite launch: {} environment(s) × 3 nodes started{}; Ctrl-C stops them",
+        args.envs,
+        match &args.record {
+            Some(dir) => format!(", recording into {}", dir.display()),
+            None => String::new(),
+        }
     );
     let deadline = args
         .duration
@@ -380,7 +466,16 @@ fn describe(status: ExitStatus) -> String {
 /// SIGINT to every node still running, wait up to [`GRACE`], SIGKILL the rest. True when all
 /// exited with code 0. (A node waiting for its restart is dead already, and was reported.)
 fn stop_all(nodes: &mut [Running]) -> bool {
-    let mut nodes: Vec<&mut Running> = nodes.iter_mut().filter(|n| n.died_at.is_none()).collect();
+    // The environments first, then the recorder: it records until they are gone.
+    let (recorders, environments): (Vec<&mut Running>, Vec<&mut Running>) = nodes
+        .iter_mut()
+        .filter(|n| n.died_at.is_none())
+        .partition(|n| n.kind == NodeKind::Recorder);
+    let clean = stop_group(environments);
+    stop_group(recorders) && clean
+}
+
+fn stop_group(mut nodes: Vec<&mut Running>) -> bool {
     for n in nodes.iter() {
         signal(&n.child, libc::SIGINT);
     }

@@ -2,6 +2,7 @@
 //! today it lists the 256 tasks and their reference splits, times whole tasks, runs the scripted
 //! expert, and launches the ROS 2 node suite.
 
+mod bag;
 mod bench;
 mod demo;
 mod expert;
@@ -26,10 +27,11 @@ enum Command {
     Expert(expert::ExpertArgs),
     Launch(launch::LaunchArgs),
     Demo(demo::DemoArgs),
+    Bag(bag::BagArgs),
     /// Run one node of the suite (what `launch` starts): `composuite node sim --ros-args ...`.
     #[command(hide = true, disable_help_flag = true)]
     Node {
-        /// sim, task_manager or reward.
+        /// sim, task_manager, reward or recorder.
         kind: String,
         /// The node's arguments (`--ros-args ...`, `--help`).
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
@@ -49,7 +51,7 @@ fn main() -> std::process::ExitCode {
                 Some(kind) => kind.main(&args),
                 None => {
                     eprintln!(
-                        "composuite node: `{kind}` is no node; valid: sim, task_manager, reward"
+                        "composuite node: `{kind}` is no node; valid: sim, task_manager, reward, recorder"
                     );
                     std::process::ExitCode::from(2)
                 }
@@ -57,6 +59,7 @@ fn main() -> std::process::ExitCode {
         }
         Command::Launch(args) => launch::run(&args),
         Command::Demo(args) => demo::run(&args),
+        Command::Bag(args) => bag::run(&args),
         Command::Tasks(args) => tasks::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Expert(args) => expert::run(&args),

@@ -235,6 +235,8 @@ impl NodeSpec {
 pub struct RosNode {
     /// The ros2-client node (create entities through [`RosNode`]'s methods, which remap).
     pub node: Node,
+    /// The ROS context (its DDS participant is what the recorder subscribes through).
+    pub context: Context,
     /// Logger (stderr + `/rosout`).
     pub log: Arc<Logger>,
     /// The parsed `--ros-args`.
@@ -342,6 +344,7 @@ impl RosNode {
                 .map_err(StartError)?;
         Ok(Startup::Node(Box::new(RosNode {
             node,
+            context,
             log,
             args,
             environment,

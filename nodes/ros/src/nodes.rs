@@ -15,6 +15,8 @@ pub enum NodeKind {
     TaskManager,
     /// Staged rewards and success.
     Reward,
+    /// Records topics into a rosbag2 bag (not part of an environment: one per suite).
+    Recorder,
 }
 
 impl NodeKind {
@@ -26,10 +28,11 @@ impl NodeKind {
         self.spec().name
     }
 
-    /// `sim` / `task_manager` / `reward` (and `*_node`).
+    /// `sim` / `task_manager` / `reward` / `recorder` (and `*_node`).
     pub fn parse(s: &str) -> Option<NodeKind> {
         NodeKind::ALL
             .into_iter()
+            .chain([NodeKind::Recorder])
             .find(|k| s == k.name() || s == k.spec().binary)
     }
 
@@ -39,6 +42,7 @@ impl NodeKind {
             NodeKind::Sim => &SIM,
             NodeKind::TaskManager => &TASK_MANAGER,
             NodeKind::Reward => &REWARD,
+            NodeKind::Recorder => &RECORDER,
         }
     }
 
@@ -48,6 +52,7 @@ impl NodeKind {
             NodeKind::Sim => run_node(&SIM, argv, crate::sim::run),
             NodeKind::TaskManager => run_node(&TASK_MANAGER, argv, crate::task_manager::run),
             NodeKind::Reward => run_node(&REWARD, argv, crate::reward::run),
+            NodeKind::Recorder => run_node(&RECORDER, argv, crate::recorder::run),
         }
     }
 }
@@ -82,4 +87,14 @@ const REWARD: NodeSpec = NodeSpec {
     about: "CompoSuite-ROS reward node: the staged reward of every step (from scene + \
             world_state) on reward, and the success flag on success.",
     params: crate::reward::PARAMS,
+};
+
+const RECORDER: NodeSpec = NodeSpec {
+    name: "recorder",
+    binary: "recorder_node",
+    about: "CompoSuite-ROS recorder node: records topics from the wire (all, a list or a \
+            regex, as `ros2 bag record`) into a rosbag2 directory with MCAP storage: \
+            metadata.yaml + <dir>_<N>.mcap, ros2msg schemas, zstd chunks. SIGINT/SIGTERM \
+            close the bag; after a SIGKILL, `composuite bag reindex DIR` restores it.",
+    params: crate::recorder::PARAMS,
 };

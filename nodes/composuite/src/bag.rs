@@ -1,0 +1,341 @@
+//! `composuite bag`: tools that read a recorded session from the bag alone — `info` (what
+//! `ros2 bag info` prints, plus the episodes found), `episodes` (the per-episode table
+//! recomputed from the recorded topics) and `reindex` (rebuild `metadata.yaml`, and the summary
+//! of a file whose recorder was killed, as `ros2 bag reindex` and `mcap recover` do).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Subcommand};
+use composuite_msgs::{cdr, msg};
+use composuite_ros::bag::reader::{for_each_message, read_metadata, reindex};
+use serde_json::json;
+
+/// Read a recorded session: info, its episodes, reindex after a crash.
+///
+/// Examples:
+///   composuite bag info runs/session
+///   composuite bag episodes runs/session --csv episodes.csv
+///   composuite bag reindex runs/session
+#[derive(Args, Debug)]
+pub struct BagArgs {
+    #[command(subcommand)]
+    command: BagCommand,
+}
+
+#[derive(Subcommand, Debug)]
+enum BagCommand {
+    /// Duration, start and end, size, messages, and per topic its type, count and
+    /// serialization format (as `ros2 bag info`), then the episodes found.
+    Info {
+        /// The bag directory.
+        bag: PathBuf,
+        /// Print JSON instead.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The per-episode table (namespace, task, seed, length, return, success, furthest stage)
+    /// recomputed from the recorded `episode` and `reward` topics.
+    Episodes {
+        /// The bag directory.
+        bag: PathBuf,
+        /// Also write the table as CSV here.
+        #[arg(long, value_name = "FILE")]
+        csv: Option<PathBuf>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Rebuild metadata.yaml from the MCAP files (a bag whose recorder was killed has none);
+    /// a file without its summary is first rewritten from its complete chunks.
+    Reindex {
+        /// The bag directory.
+        bag: PathBuf,
+    },
+}
+
+/// Run `composuite bag ...`.
+pub fn run(args: &BagArgs) -> Result<(), String> {
+    match &args.command {
+        BagCommand::Info { bag, json } => info(bag, *json),
+        BagCommand::Episodes { bag, csv, json } => {
+            let episodes = episodes(bag)?;
+            if let Some(path) = csv {
+                std::fs::write(path, episodes_csv(&episodes))
+                    .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            }
+            if *json {
+                let rows: Vec<_> = episodes.iter().map(Episode::json).collect();
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&rows).unwrap_or_default()
+                );
+            } else {
+                print!("{}", episodes_table(&episodes));
+            }
+            Ok(())
+        }
+        BagCommand::Reindex { bag } => {
+            let report = reindex(bag).map_err(|e| e.0)?;
+            for (file, why) in &report.recovered {
+                eprintln!(
+                    "composuite bag: {} had no summary ({why}); rewritten from its complete chunks",
+                    file.display()
+                );
+            }
+            println!(
+                "reindexed {}: {} files, {} messages on {} topics",
+                bag.display(),
+                report.metadata.files.len(),
+                report.metadata.message_count,
+                report.metadata.topics.len()
+            );
+            Ok(())
+        }
+    }
+}
+
+fn info(bag: &Path, as_json: bool) -> Result<(), String> {
+    let metadata = read_metadata(bag).map_err(|e| e.0)?;
+    let size: u64 = metadata
+        .files
+        .iter()
+        .filter_map(|f| std::fs::metadata(bag.join(&f.path)).ok())
+        .map(|m| m.len())
+        .sum();
+    let episodes = episodes(bag)?;
+    let finished = episodes.iter().filter(|e| e.done).count();
+    let successes = episodes.iter().filter(|e| e.success).count();
+    if as_json {
+        let topics: Vec<_> = metadata
+            .topics
+            .iter()
+            .map(|t| {
+                json!({"name": t.name, "type": t.type_name, "count": t.message_count,
+                       "serialization_format": t.serialization_format})
+            })
+            .collect();
+        let out = json!({
+            "files": metadata.files.iter().map(|f| &f.path).collect::<Vec<_>>(),
+            "bag_size": size,
+            "storage_identifier": "mcap",
+            "ros_distro": metadata.ros_distro,
+            "duration_ns": metadata.duration_ns,
+            "start_ns": metadata.end_time_ns().map(|_| metadata.starting_time_ns),
+            "end_ns": metadata.end_time_ns(),
+            "messages": metadata.message_count,
+            "topics": topics,
+            "episodes": episodes.len(),
+            "episodes_finished": finished,
+            "episodes_succeeded": successes,
+        });
+        println!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+        return Ok(());
+    }
+    let files: Vec<&str> = metadata.files.iter().map(|f| f.path.as_str()).collect();
+    println!("Files:             {}", files.join("\n                   "));
+    println!("Bag size:          {}", human_size(size));
+    println!("Storage id:        mcap");
+    println!("ROS Distro:        {}", metadata.ros_distro);
+    println!(
+        "Duration:          {:.9}s",
+        metadata.duration_ns as f64 / 1e9
+    );
+    if let Some(end) = metadata.end_time_ns() {
+        println!("Start:             {}", stamp(metadata.starting_time_ns));
+        println!("End:               {}", stamp(end));
+    }
+    println!("Messages:          {}", metadata.message_count);
+    let width = metadata
+        .topics
+        .iter()
+        .map(|t| t.name.len())
+        .max()
+        .unwrap_or(0);
+    for (i, t) in metadata.topics.iter().enumerate() {
+        let label = if i == 0 {
+            "Topic information: "
+        } else {
+            "                   "
+        };
+        println!(
+            "{label}Topic: {:width$} | Type: {} | Count: {} | Serialization Format: {}",
+            t.name, t.type_name, t.message_count, t.serialization_format
+        );
+    }
+    println!(
+        "Episodes:          {} ({finished} finished, {successes} succeeded)",
+        episodes.len()
+    );
+    Ok(())
+}
+
+/// `1795554521.784715650` as ros2 bag info shows stamps (seconds since the epoch).
+fn stamp(ns: u64) -> String {
+    format!("{}.{:09}", ns / 1_000_000_000, ns % 1_000_000_000)
+}
+
+fn human_size(bytes: u64) -> String {
+    let units = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < units.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    format!("{value:.1} {}", units[unit])
+}
+
+/// One episode as the bag shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Episode {
+    /// Namespace of its environment (`/` or `/env_00`).
+    pub namespace: String,
+    /// Episode number given by the task manager.
+    pub episode: u32,
+    /// `robot/object/obstacle/objective`.
+    pub task: String,
+    /// Its seed.
+    pub seed: u64,
+    /// Control steps taken.
+    pub length: u32,
+    /// Sum of its rewards.
+    pub episode_return: f64,
+    /// Whether any step had reward 1 (the paper's success).
+    pub success: bool,
+    /// Furthest stage reached (index into the objective's stages; -1 for none).
+    pub furthest_stage: i8,
+    /// Whether it ended (horizon, termination, reset) before the recording did.
+    pub done: bool,
+    /// Why it ended, as the task manager said.
+    pub reason: String,
+}
+
+impl Episode {
+    fn json(&self) -> serde_json::Value {
+        json!({"namespace": self.namespace, "episode": self.episode, "task": self.task,
+               "seed": self.seed, "length": self.length, "return": self.episode_return,
+               "success": self.success, "furthest_stage": self.furthest_stage,
+               "done": self.done, "reason": self.reason})
+    }
+}
+
+/// The episodes of a bag, from its `episode` (EpisodeStatus) and `reward` (StagedReward)
+/// topics, in the order they started.
+pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
+    let mut found: Vec<Episode> = Vec::new();
+    let mut index: BTreeMap<(String, u32, u64), usize> = BTreeMap::new();
+    let mut stages: BTreeMap<(String, u32), i8> = BTreeMap::new();
+    let namespace_of = |topic: &str| -> String {
+        match topic.rsplit_once('/') {
+            Some(("", _)) | None => "/".into(),
+            Some((ns, _)) => ns.into(),
+        }
+    };
+    let truncated = for_each_message(bag, |m| {
+        match m.type_name {
+            "composuite_msgs/msg/EpisodeStatus" => {
+                let s: msg::EpisodeStatus =
+                    cdr::decode(m.data).map_err(|e| format!("{}: {e}", m.topic))?;
+                let ns = namespace_of(m.topic);
+                let key = (ns.clone(), s.episode, s.seed);
+                let i = *index.entry(key).or_insert_with(|| {
+                    found.push(Episode {
+                        namespace: ns,
+                        episode: s.episode,
+                        task: format!(
+                            "{}/{}/{}/{}",
+                            s.task.robot, s.task.object, s.task.obstacle, s.task.objective
+                        ),
+                        seed: s.seed,
+                        length: 0,
+                        episode_return: 0.0,
+                        success: false,
+                        furthest_stage: -1,
+                        done: false,
+                        reason: String::new(),
+                    });
+                    found.len() - 1
+                });
+                let e = &mut found[i];
+                if s.step >= e.length {
+                    e.length = s.step;
+                    e.episode_return = s.episode_return;
+                    e.success |= s.success_seen;
+                    e.done |= s.done;
+                    if s.done {
+                        e.reason = s.reason_text.clone();
+                    }
+                }
+            }
+            "composuite_msgs/msg/StagedReward" => {
+                let r: msg::StagedReward =
+                    cdr::decode(m.data).map_err(|e| format!("{}: {e}", m.topic))?;
+                let stage = stages
+                    .entry((namespace_of(m.topic), r.episode))
+                    .or_insert(-1);
+                *stage = (*stage).max(r.current_stage);
+            }
+            _ => {}
+        }
+        Ok(())
+    })
+    .map_err(|e| e.0)?;
+    for (file, why) in truncated {
+        eprintln!(
+            "composuite bag: {} ends early ({why}); episodes counted up to its last complete chunk",
+            file.display()
+        );
+    }
+    for e in &mut found {
+        if let Some(stage) = stages.get(&(e.namespace.clone(), e.episode)) {
+            e.furthest_stage = *stage;
+        }
+    }
+    Ok(found)
+}
+
+/// The table as CSV (one header line).
+pub fn episodes_csv(episodes: &[Episode]) -> String {
+    let mut out = String::from(
+        "namespace,episode,task,seed,length,return,success,furthest_stage,done,reason\n",
+    );
+    for e in episodes {
+        out.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},\"{}\"\n",
+            e.namespace,
+            e.episode,
+            e.task,
+            e.seed,
+            e.length,
+            e.episode_return,
+            e.success,
+            e.furthest_stage,
+            e.done,
+            e.reason.replace('"', "\"\"")
+        ));
+    }
+    out
+}
+
+fn episodes_table(episodes: &[Episode]) -> String {
+    let mut out = format!(
+        "{:<10} {:>7}  {:<40} {:>6} {:>6} {:>9} {:>7} {:>5}\n",
+        "namespace", "episode", "task", "seed", "length", "return", "success", "stage"
+    );
+    for e in episodes {
+        out.push_str(&format!(
+            "{:<10} {:>7}  {:<40} {:>6} {:>6} {:>9.3} {:>7} {:>5}{}\n",
+            e.namespace,
+            e.episode,
+            e.task,
+            e.seed,
+            e.length,
+            e.episode_return,
+            if e.success { "yes" } else { "no" },
+            e.furthest_stage,
+            if e.done { "" } else { "  (not finished)" }
+        ));
+    }
+    out
+}
