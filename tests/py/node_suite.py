@@ -130,6 +130,48 @@ def require_isolation() -> None:
     raise RuntimeError("DDS tests must not run where a route leads off the machine")
 
 
+class Launched:
+    """`composuite launch` of one environment of `task` in `namespace` (cyclone service format,
+    `extra` launch options after), its output in a file."""
+
+    def __init__(self, log_dir: Path, namespace: str, task: str, *extra: str):
+        self.namespace, self.domain = namespace, random_domain()
+        self.log = log_dir / "launch.stderr"
+        env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
+        env["ROS_DOMAIN_ID"] = str(self.domain)
+        with open(self.log, "wb") as stderr:
+            self.process = subprocess.Popen(
+                [*suite_launcher(), str(node_dir() / "composuite"), "launch",
+                 "--task", task, "--namespace", namespace, "--service-mapping", "cyclone",
+                 "--log-level", "info", *extra],
+                env=env, stdin=subprocess.DEVNULL, stdout=stderr, stderr=stderr)
+
+    def text(self) -> str:
+        return self.log.read_text(errors="replace")
+
+    def kill_node(self, kind: str) -> int:
+        (pid,) = node_processes(f"__ns:={self.namespace}", kind)
+        os.kill(pid, signal.SIGKILL)
+        return pid
+
+    def wait_for_log(self, text: str, timeout: float = 20.0) -> None:
+        deadline = time.monotonic() + timeout
+        while text not in self.text():
+            assert self.process.poll() is None, f"launch exited:\n{self.text()[-4000:]}"
+            assert time.monotonic() < deadline, f"launch never said {text!r}:\n{self.text()[-4000:]}"
+            time.sleep(0.05)
+
+    def stop(self) -> None:
+        self.process.send_signal(signal.SIGINT)
+        try:
+            code = self.process.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            code = self.process.wait()
+        assert code == 0, f"launch exited {code}:\n{self.text()[-4000:]}"
+        assert node_processes(f"__ns:={self.namespace}") == [], "nodes left running"
+
+
 class Suite:
     """The three nodes of one environment in `namespace`, each with its stderr in a file.
 

@@ -21,54 +21,13 @@ from pathlib import Path
 import pytest
 
 import node_suite
-from node_suite import env_replay_run, float_bits, ns_of
+from node_suite import Launched, env_replay_run, float_bits, ns_of
 from ros_agent import Agent, LockstepClient
 
 TASK = "Gen3/box/object_wall/pick_place"
 STEP_TIMEOUT = 5.0
 RESPAWN_DELAY = 0.5
 HERE = Path(__file__).resolve().parent
-
-
-class Launched:
-    """`composuite launch` of one environment in `namespace`, its stderr in a file."""
-
-    def __init__(self, log_dir: Path, namespace: str):
-        self.namespace, self.domain = namespace, node_suite.random_domain()
-        self.log = log_dir / "launch.stderr"
-        env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
-        env["ROS_DOMAIN_ID"] = str(self.domain)
-        with open(self.log, "wb") as stderr:
-            self.process = subprocess.Popen(
-                [*node_suite.suite_launcher(), str(node_suite.node_dir() / "composuite"), "launch",
-                 "--task", TASK, "--namespace", namespace, "--service-mapping", "cyclone",
-                 "--respawn", "3", "--respawn-delay", str(RESPAWN_DELAY), "--log-level", "info"],
-                env=env, stdin=subprocess.DEVNULL, stdout=stderr, stderr=stderr)
-
-    def text(self) -> str:
-        return self.log.read_text(errors="replace")
-
-    def kill_node(self, kind: str) -> int:
-        (pid,) = node_suite.node_processes(f"__ns:={self.namespace}", kind)
-        os.kill(pid, signal.SIGKILL)
-        return pid
-
-    def wait_for_log(self, text: str, timeout: float = 20.0) -> None:
-        deadline = time.monotonic() + timeout
-        while text not in self.text():
-            assert self.process.poll() is None, f"launch exited:\n{self.text()[-4000:]}"
-            assert time.monotonic() < deadline, f"launch never said {text!r}:\n{self.text()[-4000:]}"
-            time.sleep(0.05)
-
-    def stop(self) -> None:
-        self.process.send_signal(signal.SIGINT)
-        try:
-            code = self.process.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            code = self.process.wait()
-        assert code == 0, f"launch exited {code}:\n{self.text()[-4000:]}"
-        assert node_suite.node_processes(f"__ns:={self.namespace}") == [], "nodes left running"
 
 
 class Stepper(LockstepClient):
@@ -142,7 +101,8 @@ class Stepper(LockstepClient):
 
 @pytest.fixture
 def launched(tmp_path, request):
-    suite = Launched(tmp_path, f"/fault_{request.node.name[5:25]}")
+    suite = Launched(tmp_path, f"/fault_{request.node.name[5:25]}", TASK,
+                     "--respawn", "3", "--respawn-delay", str(RESPAWN_DELAY))
     yield suite
     suite.stop()
 
