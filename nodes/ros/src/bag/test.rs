@@ -114,6 +114,35 @@ fn a_closed_bag_reads_back_exactly() {
 }
 
 #[test]
+fn a_publisher_hash_that_is_not_ours_gets_no_schema() {
+    let dir = scratch("hash");
+    let mut bag = BagWriter::create(&dir, BagOptions::default()).unwrap();
+    let ours = super::definitions::lookup("std_msgs/msg/Bool")
+        .unwrap()
+        .type_hash;
+    bag.add_topic("/same", "std_msgs/msg/Bool", vec![], ours)
+        .unwrap();
+    bag.add_topic("/other", "std_msgs/msg/Bool", vec![], "RIHS01_00")
+        .unwrap();
+    let m = bag.close().unwrap();
+    assert_eq!(m.topics[0].type_description_hash, ours);
+    assert_eq!(m.topics[1].type_description_hash, "RIHS01_00");
+    let file = std::fs::read(dir.join(&m.files[0].path)).unwrap();
+    let summary = mcap::read::Summary::read(&file).unwrap().unwrap();
+    let schema_of = |topic: &str| {
+        let c = summary
+            .channels
+            .values()
+            .find(|c| c.topic == topic)
+            .unwrap();
+        c.schema.as_ref().unwrap().encoding.clone()
+    };
+    assert_eq!(schema_of("/same"), "ros2msg");
+    assert_eq!(schema_of("/other"), "");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn an_existing_directory_is_refused() {
     let dir = scratch("exists");
     std::fs::create_dir_all(&dir).unwrap();

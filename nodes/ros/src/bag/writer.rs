@@ -71,6 +71,8 @@ pub struct BagWriter {
     stem: String,
     options: BagOptions,
     topics: Vec<TopicInfo>,
+    /// The `ros2msg` schema text of each topic, when known.
+    definitions: Vec<Option<&'static str>>,
     closed_files: Vec<FileInfo>,
     current: Option<OpenFile>,
     /// Log times only move forward (arrival order), so files are in time order.
@@ -113,6 +115,7 @@ impl BagWriter {
             stem,
             options,
             topics: Vec::new(),
+            definitions: Vec::new(),
             closed_files: Vec::new(),
             current: None,
             last_log_time: 0,
@@ -126,8 +129,11 @@ impl BagWriter {
         &self.dir
     }
 
-    /// Add a topic (its schema and channel are written at once). `type_hash` may be empty; the
-    /// type's definition comes from the msgs crate when it knows the type.
+    /// Add a topic (its schema and channel are written at once). `type_hash` is what the
+    /// publishers announced (may be empty). The schema holds the msgs crate's definition when
+    /// it knows the type *and* the hashes agree; otherwise the schema is empty (as rosbag2
+    /// writes a type it has no definition of) — a definition that is not the publisher's would
+    /// decode the bytes wrongly.
     pub fn add_topic(
         &mut self,
         name: &str,
@@ -135,13 +141,14 @@ impl BagWriter {
         qos: Vec<OfferedQos>,
         type_hash: &str,
     ) -> Result<TopicId, BagError> {
-        let hash = if type_hash.is_empty() {
-            definitions::lookup(type_name)
-                .map(|d| d.type_hash.to_string())
-                .unwrap_or_default()
-        } else {
-            type_hash.to_string()
+        let known = definitions::lookup(type_name);
+        let (hash, definition) = match known {
+            Some(d) if type_hash.is_empty() || type_hash == d.type_hash => {
+                (d.type_hash.to_string(), Some(d.definition))
+            }
+            _ => (type_hash.to_string(), None),
         };
+        self.definitions.push(definition);
         self.topics.push(TopicInfo {
             name: name.into(),
             type_name: type_name.into(),
@@ -156,7 +163,8 @@ impl BagWriter {
             .current
             .as_mut()
             .expect("a bag always has an open file");
-        let channel = add_channel(&mut file.writer, &topic).map_err(|e| file.error(e))?;
+        let channel =
+            add_channel(&mut file.writer, &topic, definition).map_err(|e| file.error(e))?;
         file.channels.push(channel);
         Ok(id)
     }
@@ -280,8 +288,9 @@ impl BagWriter {
                 writer
             },
         };
-        for topic in &self.topics {
-            let channel = add_channel(&mut open.writer, topic).map_err(|e| open.error(e))?;
+        for (topic, definition) in self.topics.iter().zip(&self.definitions) {
+            let channel =
+                add_channel(&mut open.writer, topic, *definition).map_err(|e| open.error(e))?;
             open.channels.push(channel);
         }
         // The header and schemas are on disk before the first message.
@@ -324,9 +333,10 @@ impl OpenFile {
 fn add_channel(
     writer: &mut mcap::Writer<CountingFile>,
     topic: &TopicInfo,
+    definition: Option<&str>,
 ) -> Result<u16, mcap::McapError> {
-    let (encoding, text) = match definitions::lookup(&topic.type_name) {
-        Some(d) => ("ros2msg", d.definition),
+    let (encoding, text) = match definition {
+        Some(d) => ("ros2msg", d),
         // rosbag2's choice for a type it has no definition of: an empty schema.
         None => ("", ""),
     };
