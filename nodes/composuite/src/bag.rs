@@ -212,7 +212,8 @@ pub struct Episode {
 }
 
 impl Episode {
-    fn json(&self) -> serde_json::Value {
+    /// The row as JSON (what `--json` prints).
+    pub fn json(&self) -> serde_json::Value {
         json!({"namespace": self.namespace, "episode": self.episode, "task": self.task,
                "seed": self.seed, "length": self.length, "return": self.episode_return,
                "success": self.success, "furthest_stage": self.furthest_stage,

@@ -49,7 +49,7 @@ pub struct LaunchArgs {
     seed: Option<u64>,
     /// Control steps per episode [default: 500].
     #[arg(long)]
-    horizon: Option<u32>,
+    pub(crate) horizon: Option<u32>,
     /// Service wire format: fastdds (rmw_fastrtps, Jazzy's default) or cyclone (rmw_cyclonedds)
     /// [default: fastdds].
     #[arg(long)]
@@ -79,7 +79,7 @@ pub struct LaunchArgs {
     /// `ros2 bag record -a -s mcap -o DIR` would: the recorder node starts first and closes the
     /// bag last. If it dies, the suite keeps running without it.
     #[arg(long, value_name = "DIR")]
-    record: Option<PathBuf>,
+    pub(crate) record: Option<PathBuf>,
     /// With --record: record only topics whose full name matches this regex.
     #[arg(long, value_name = "REGEX", requires = "record")]
     record_regex: Option<String>,

@@ -5,8 +5,10 @@
 mod bag;
 mod bench;
 mod demo;
+mod drive;
 mod expert;
 mod launch;
+mod session;
 mod tasks;
 
 use clap::{Parser, Subcommand};
@@ -27,6 +29,7 @@ enum Command {
     Expert(expert::ExpertArgs),
     Launch(launch::LaunchArgs),
     Demo(demo::DemoArgs),
+    Session(session::SessionArgs),
     Bag(bag::BagArgs),
     /// Run one node of the suite (what `launch` starts): `composuite node sim --ros-args ...`.
     #[command(hide = true, disable_help_flag = true)]
@@ -60,6 +63,7 @@ fn main() -> std::process::ExitCode {
         Command::Launch(args) => launch::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Bag(args) => bag::run(&args),
+        Command::Session(args) => session::run(&args),
         Command::Tasks(args) => tasks::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Expert(args) => expert::run(&args),

@@ -1,0 +1,434 @@
+//! An agent that drives one lockstep environment of the suite over ROS 2, as a user's agent
+//! would: `set_task` and `reset` through the services, one `joint_command` per step, and the
+//! step's `observation`, `reward` and `episode` awaited by (episode, step). A built-in policy
+//! chooses the commands; an in-process twin `Env`, fed the same commands, gives the policy its
+//! state and checks every observation and reward bit for bit. `composuite demo` and
+//! `composuite session` are both this loop.
+
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+use composuite_core::TaskSpec;
+use composuite_core::env::{Action, Env, EnvConfig};
+use composuite_core::expert::Expert;
+use composuite_core::physics::{ARM_DOF, FINGER_JOINTS, finger_for_gap, pad_gap, robot_model};
+use composuite_msgs::msg;
+use composuite_msgs::sensor_msgs::msg::JointState;
+use composuite_msgs::srv;
+use composuite_ros::node::{NodeSpec, RosNode, Startup};
+use composuite_ros::{convert, names, qos};
+use futures::{FutureExt, StreamExt};
+use rand::{Rng, SeedableRng};
+
+use crate::launch::Suite;
+
+/// Seconds to wait for one step's messages, or for a service reply.
+const STEP_TIMEOUT: Duration = Duration::from_secs(10);
+/// How long the suite gets to come up (discovery included).
+const STARTUP_TIMEOUT: Duration = Duration::from_secs(30);
+
+const AGENT: NodeSpec = NodeSpec {
+    name: "agent",
+    binary: "composuite",
+    about: "a built-in policy as a ROS 2 agent",
+    params: &[],
+};
+
+/// Who chooses the commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PolicyKind {
+    /// The scripted expert.
+    Expert,
+    /// Joint goals = measured q + 0.05·U(−1, 1) per joint (the reference's action scale for
+    /// a uniform random action), gripper left as it is.
+    Random,
+    /// Hold the start pose.
+    Zero,
+}
+
+impl PolicyKind {
+    /// `expert`, `random` or `zero`.
+    pub fn parse(s: &str) -> Result<PolicyKind, String> {
+        match s {
+            "expert" => Ok(PolicyKind::Expert),
+            "random" => Ok(PolicyKind::Random),
+            "zero" => Ok(PolicyKind::Zero),
+            other => Err(format!(
+                "policy `{other}` is unknown; valid: expert, random, zero"
+            )),
+        }
+    }
+
+    /// The name `parse` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            PolicyKind::Expert => "expert",
+            PolicyKind::Random => "random",
+            PolicyKind::Zero => "zero",
+        }
+    }
+}
+
+/// One policy for one episode.
+enum Policy {
+    Expert(Box<Expert>),
+    Random(Box<rand_chacha::ChaCha8Rng>),
+    Zero([f64; ARM_DOF]),
+}
+
+impl Policy {
+    fn new(kind: PolicyKind, task: TaskSpec, seed: u64, env: &Env) -> Policy {
+        match kind {
+            PolicyKind::Expert => Policy::Expert(Box::new(Expert::new(task))),
+            PolicyKind::Random => {
+                Policy::Random(Box::new(rand_chacha::ChaCha8Rng::seed_from_u64(seed)))
+            }
+            PolicyKind::Zero => Policy::Zero(measured(env)),
+        }
+    }
+
+    /// Arm joint targets and, when the gripper is commanded, its finger joint target.
+    fn act(&mut self, env: &Env) -> Result<([f64; ARM_DOF], Option<f64>), String> {
+        match self {
+            Policy::Expert(expert) => match expert.act(env) {
+                Action::Absolute { joints, gripper } => {
+                    Ok((joints, gripper.map(|(gap, _)| finger_for_gap(gap))))
+                }
+                Action::Reference(_) => Err("the expert acted with a reference action".into()),
+            },
+            Policy::Random(rng) => {
+                let mut q = measured(env);
+                for v in &mut q {
+                    *v += 0.05 * rng.random_range(-1.0..=1.0);
+                }
+                Ok((q, None))
+            }
+            Policy::Zero(home) => Ok((*home, None)),
+        }
+    }
+}
+
+fn measured(env: &Env) -> [f64; ARM_DOF] {
+    std::array::from_fn(|j| env.world().joint_position(j))
+}
+
+/// What to drive: every task × `episodes` episodes (seeds `seed`, `seed` + 1, ...).
+pub struct Plan {
+    /// Namespace of the environment.
+    pub namespace: String,
+    /// Tasks in order (the environment starts on the first).
+    pub tasks: Vec<TaskSpec>,
+    /// Episodes per task.
+    pub episodes: u32,
+    /// Seed of each task's first episode.
+    pub seed: u64,
+    /// The policy.
+    pub policy: PolicyKind,
+    /// Wait until a recorder has subscribed to the environment's topics before the first reset,
+    /// so the session's messages are all recorded.
+    pub wait_for_recorder: bool,
+}
+
+/// One episode as the agent saw it.
+#[derive(Debug, Clone)]
+pub struct EpisodeOutcome {
+    /// The task.
+    pub task: TaskSpec,
+    /// Episode number the task manager gave.
+    pub episode: u32,
+    /// Its seed.
+    pub seed: u64,
+    /// Control steps.
+    pub steps: u32,
+    /// Sum of the step rewards.
+    pub episode_return: f64,
+    /// First step with reward 1, if any.
+    pub first_success: Option<u32>,
+    /// Furthest stage reached (−1: none).
+    pub furthest_stage: i8,
+    /// Why it ended, as the task manager said.
+    pub reason: String,
+    /// Every observation and reward equalled the in-process twin's, bit for bit.
+    pub identical: bool,
+    /// Lockstep steps per second over the episode.
+    pub steps_per_s: f64,
+}
+
+/// Play the plan on a running suite; `each` is called after every episode.
+pub fn drive(
+    plan: &Plan,
+    suite: &mut Suite,
+    mut each: impl FnMut(&EpisodeOutcome),
+) -> Result<Vec<EpisodeOutcome>, String> {
+    let argv: Vec<String> = ["--ros-args", "-r", &format!("__ns:={}", plan.namespace)]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let mut node = match RosNode::start(&AGENT, &argv).map_err(|e| e.to_string())? {
+        Startup::Node(node) => node,
+        Startup::Help(_) => unreachable!("no --help given"),
+    };
+    let e = |e: composuite_ros::node::StartError| e.to_string();
+    let command = node
+        .publisher::<JointState>(names::JOINT_COMMAND, qos::state())
+        .map_err(e)?;
+    let observations = node
+        .subscription::<msg::Observation>(names::OBSERVATION, qos::state())
+        .map_err(e)?;
+    let rewards = node
+        .subscription::<msg::StagedReward>(names::REWARD, qos::state())
+        .map_err(e)?;
+    let statuses = node
+        .subscription::<msg::EpisodeStatus>(names::EPISODE, qos::state())
+        .map_err(e)?;
+    let reset = node.client::<srv::Reset>(names::RESET).map_err(e)?;
+    let set_task = node.client::<srv::SetTask>(names::SET_TASK).map_err(e)?;
+    if plan.wait_for_recorder {
+        wait_for_recorder(&node, &plan.namespace, suite)?;
+    }
+    let mut outcomes = Vec::new();
+    smol::block_on(async {
+        let mut observation_stream = std::pin::pin!(observations.async_stream());
+        let mut reward_stream = std::pin::pin!(rewards.async_stream());
+        let mut status_stream = std::pin::pin!(statuses.async_stream());
+        let mut seen = Received::default();
+        for (t, &task) in plan.tasks.iter().enumerate() {
+            if t > 0 {
+                call_set_task(&set_task, task, suite).await?;
+            }
+            let joint_names = convert::joint_names(robot_model(task.robot));
+            // The in-process twin (each reset starts from a fresh copy of its world).
+            let mut twin = Env::new(task, EnvConfig::default());
+            for e in 0..plan.episodes {
+                let seed = plan.seed + e as u64;
+                let timeout = if outcomes.is_empty() {
+                    STARTUP_TIMEOUT
+                } else {
+                    STEP_TIMEOUT
+                };
+                let reply = call_reset(&reset, seed, timeout, suite).await?;
+                let first = twin.reset(seed).map_err(|e| e.to_string())?;
+                let mut outcome = EpisodeOutcome {
+                    task,
+                    episode: reply.episode,
+                    seed,
+                    steps: 0,
+                    episode_return: 0.0,
+                    first_success: None,
+                    furthest_stage: -1,
+                    reason: String::new(),
+                    identical: bits(&reply.observation.flat) == bits(&first.flat()),
+                    steps_per_s: 0.0,
+                };
+                let mut policy = Policy::new(plan.policy, task, seed, &twin);
+                let started = Instant::now();
+                seen.clear();
+                loop {
+                    let (joints, finger) = policy.act(&twin)?;
+                    // The gripper rides in the same message (a finger joint target), so arm and
+                    // gripper change in the same step.
+                    let mut names: Vec<String> = joint_names[..ARM_DOF].to_vec();
+                    let mut positions = joints.to_vec();
+                    if let Some(q) = finger {
+                        names.push(FINGER_JOINTS[0].into());
+                        positions.push(q);
+                    }
+                    command
+                        .publish(JointState {
+                            name: names,
+                            position: positions,
+                            ..Default::default()
+                        })
+                        .map_err(|e| format!("joint_command: {e:?}"))?;
+                    let step = twin
+                        .step(&Action::Absolute {
+                            joints,
+                            gripper: finger.map(|q| (pad_gap(q), 0.0)),
+                        })
+                        .map_err(|e| e.to_string())?;
+                    let key = (reply.episode, twin.steps());
+                    let deadline = Instant::now() + STEP_TIMEOUT;
+                    while !seen.complete(key) {
+                        let remaining = deadline.saturating_duration_since(Instant::now());
+                        futures::select! {
+                            o = observation_stream.select_next_some() => if let Ok((o, _)) = o { seen.observations.insert((o.episode, o.step), o); },
+                            r = reward_stream.select_next_some() => if let Ok((r, _)) = r { seen.rewards.insert((r.episode, r.step), r); },
+                            s = status_stream.select_next_some() => if let Ok((s, _)) = s { seen.statuses.insert((s.episode, s.step), s); },
+                            _ = FutureExt::fuse(smol::Timer::after(remaining)) => {
+                                return Err(format!("no observation/reward/episode for step {} within {:?}{}",
+                                    key.1, STEP_TIMEOUT, suite.died().map(|d| format!(" ({d})")).unwrap_or_default()));
+                            }
+                        }
+                    }
+                    let (o, r, s) = seen.take(key);
+                    outcome.identical &= bits(&o.flat) == bits(&step.observation.flat())
+                        && r.total.to_bits() == step.reward.to_bits();
+                    outcome.episode_return += r.total;
+                    outcome.furthest_stage = outcome.furthest_stage.max(r.current_stage);
+                    if r.success && outcome.first_success.is_none() {
+                        outcome.first_success = Some(key.1);
+                    }
+                    if s.done {
+                        outcome.reason = s.reason_text;
+                        break;
+                    }
+                }
+                outcome.steps = twin.steps();
+                outcome.steps_per_s = outcome.steps as f64 / started.elapsed().as_secs_f64();
+                each(&outcome);
+                outcomes.push(outcome);
+            }
+        }
+        Ok::<(), String>(())
+    })?;
+    node.shutdown();
+    Ok(outcomes)
+}
+
+/// Until a recorder reads the environment's topics: topics only a recorder subscribes to
+/// (`clock`, `joint_states`, `success`, `tf`) have a reader, and `joint_command` has two (the
+/// sim and the recorder); then a moment for the readers to match their writers.
+fn wait_for_recorder(node: &RosNode, namespace: &str, suite: &mut Suite) -> Result<(), String> {
+    let ns = namespace.trim_end_matches('/');
+    let wanted = [
+        (names::CLOCK, 1),
+        (names::JOINT_STATES, 1),
+        (names::SUCCESS, 1),
+        (names::TF, 1),
+        (names::JOINT_COMMAND, 2),
+    ];
+    let participant = node.context.domain_participant();
+    let deadline = Instant::now() + STARTUP_TIMEOUT;
+    loop {
+        let readers = participant.discovered_readers();
+        let count = |topic: &str| {
+            let dds = format!("rt{ns}/{topic}");
+            readers
+                .iter()
+                .filter(|r| r.subscription_topic_data.topic_name() == &dds)
+                .count()
+        };
+        if wanted.iter().all(|(topic, n)| count(topic) >= *n) {
+            std::thread::sleep(Duration::from_millis(500));
+            return Ok(());
+        }
+        if let Some(died) = suite.died() {
+            return Err(died);
+        }
+        if Instant::now() > deadline {
+            return Err(format!(
+                "the recorder did not subscribe to {ns}'s topics within {STARTUP_TIMEOUT:?}"
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// Messages received, by (episode, step), until their step is complete.
+#[derive(Default)]
+struct Received {
+    observations: HashMap<(u32, u32), msg::Observation>,
+    rewards: HashMap<(u32, u32), msg::StagedReward>,
+    statuses: HashMap<(u32, u32), msg::EpisodeStatus>,
+}
+
+impl Received {
+    fn complete(&self, key: (u32, u32)) -> bool {
+        self.observations.contains_key(&key)
+            && self.rewards.contains_key(&key)
+            && self.statuses.contains_key(&key)
+    }
+
+    fn take(
+        &mut self,
+        key: (u32, u32),
+    ) -> (msg::Observation, msg::StagedReward, msg::EpisodeStatus) {
+        (
+            self.observations.remove(&key).expect("complete"),
+            self.rewards.remove(&key).expect("complete"),
+            self.statuses.remove(&key).expect("complete"),
+        )
+    }
+
+    fn clear(&mut self) {
+        self.observations.clear();
+        self.rewards.clear();
+        self.statuses.clear();
+    }
+}
+
+/// Send a request, resending every second until `timeout` (the first call may go out before
+/// discovery has matched the service); the first reply.
+async fn call<Req, Resp>(
+    client: &ros2_client::dds::Client<Req, Resp>,
+    request: Req,
+    what: &str,
+    timeout: Duration,
+    suite: &mut Suite,
+) -> Result<Resp, String>
+where
+    Req: composuite_msgs::RosMessage + ros2_client::Message + Clone,
+    Resp: composuite_msgs::RosMessage + ros2_client::Message,
+{
+    let deadline = Instant::now() + timeout;
+    while Instant::now() < deadline {
+        if let Some(died) = suite.died() {
+            return Err(died);
+        }
+        let Ok(id) = client.send_request(request.clone()) else {
+            smol::Timer::after(Duration::from_millis(200)).await;
+            continue;
+        };
+        futures::select! {
+            reply = client.async_receive_response(id).fuse() => if let Ok(reply) = reply {
+                return Ok(reply);
+            },
+            _ = FutureExt::fuse(smol::Timer::after(Duration::from_secs(1))) => {}
+        }
+    }
+    Err(format!(
+        "the suite did not answer {what} within {timeout:?}"
+    ))
+}
+
+async fn call_reset(
+    client: &ros2_client::dds::Client<srv::ResetRequest, srv::ResetResponse>,
+    seed: u64,
+    timeout: Duration,
+    suite: &mut Suite,
+) -> Result<srv::ResetResponse, String> {
+    let request = srv::ResetRequest {
+        seed,
+        use_seed: true,
+    };
+    let reply = call(client, request, "reset", timeout, suite).await?;
+    if reply.success {
+        Ok(reply)
+    } else {
+        Err(format!("reset refused: {}", reply.message))
+    }
+}
+
+async fn call_set_task(
+    client: &ros2_client::dds::Client<srv::SetTaskRequest, srv::SetTaskResponse>,
+    task: TaskSpec,
+    suite: &mut Suite,
+) -> Result<(), String> {
+    let spec = convert::task_spec(&task);
+    let request = srv::SetTaskRequest {
+        robot: spec.robot,
+        object: spec.object,
+        obstacle: spec.obstacle,
+        objective: spec.objective,
+    };
+    let reply = call(client, request, "set_task", STEP_TIMEOUT, suite).await?;
+    if reply.success {
+        Ok(())
+    } else {
+        Err(format!("set_task {task} refused: {}", reply.message))
+    }
+}
+
+fn bits(values: &[f64]) -> Vec<u64> {
+    values.iter().map(|v| v.to_bits()).collect()
+}

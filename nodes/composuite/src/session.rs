@@ -1,0 +1,252 @@
+//! `composuite session`: one headless, recorded session. It launches one lockstep environment
+//! and the recorder, drives tasks × episodes with a built-in policy through the ROS interfaces
+//! (see `drive`), and leaves in `--out`: the rosbag2 bag of everything on the wire (`bag/`),
+//! the per-episode table as CSV and JSON, and a printed summary.
+
+use std::path::{Path, PathBuf};
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
+
+use clap::Args;
+use composuite_core::TaskSpec;
+
+use crate::bag::{Episode, episodes_csv};
+use crate::drive::{EpisodeOutcome, Plan, PolicyKind, drive};
+use crate::launch::{LaunchArgs, Suite};
+
+/// Run a recorded headless session: the suite, the recorder, and a built-in policy as the agent.
+///
+/// Launches one lockstep environment (task_manager, sim, reward) and the recorder, then plays
+/// every --tasks × --episodes (seeds --seed, --seed+1, ...) with --policy over ROS 2 (set_task,
+/// reset, joint_command; observation, reward, episode). Writes into --out: `bag/` (rosbag2,
+/// MCAP: every topic, the agent's commands included), `episodes.csv` and `episodes.json` (task,
+/// seed, length, return, success, furthest stage per episode), and prints a summary. Every
+/// observation is checked against the in-process environment given the same commands.
+///
+/// Examples:
+///   composuite session
+///   composuite session --tasks IIWA/box/no_obstacle/pick_place Jaco/plate/goal_wall/push
+///       --episodes 5 --policy random --out runs/random
+#[derive(Args, Debug)]
+pub struct SessionArgs {
+    /// Tasks, robot/object/obstacle/objective, played in order.
+    #[arg(long, num_args = 1.., default_values_t = [composuite_ros::task_manager::DEFAULT_TASK.to_string()])]
+    tasks: Vec<String>,
+    /// Episodes per task.
+    #[arg(long, default_value_t = 3)]
+    episodes: u32,
+    /// The agent: expert (the scripted expert), random (joint goals measured q + 0.05·U(-1,1)),
+    /// zero (hold the start pose).
+    #[arg(long, default_value = "expert")]
+    policy: String,
+    /// Seed of each task's first episode.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Control steps per episode [default: 500].
+    #[arg(long)]
+    horizon: Option<u32>,
+    /// Output directory (must not exist) [default: runs/session_<unix time>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print the per-episode table as JSON instead of the summary.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Run the session.
+pub fn run(args: &SessionArgs) -> Result<(), String> {
+    let tasks = args
+        .tasks
+        .iter()
+        .map(|t| {
+            t.parse::<TaskSpec>()
+                .map_err(|e| format!("--tasks {t}: {e}"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let policy = PolicyKind::parse(&args.policy).map_err(|e| format!("--policy: {e}"))?;
+    if args.episodes == 0 {
+        return Err("--episodes must be at least 1".into());
+    }
+    let out = args.out.clone().unwrap_or_else(|| {
+        let now = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map(|d| d.as_secs())
+            .unwrap_or(0);
+        PathBuf::from(format!("runs/session_{now}"))
+    });
+    if out.exists() {
+        return Err(format!(
+            "--out {}: it exists already; give a new directory",
+            out.display()
+        ));
+    }
+    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let bag = out.join("bag");
+    let namespace = format!("/session_{}", std::process::id());
+    let mut launch = LaunchArgs::one_environment(&args.tasks[0], &namespace, "warn");
+    launch.record = Some(bag.clone());
+    launch.horizon = args.horizon;
+    let total = tasks.len() as u64 * u64::from(args.episodes);
+    eprintln!(
+        "composuite session: {} task(s) × {} episode(s), policy {}, recording into {}",
+        tasks.len(),
+        args.episodes,
+        policy.name(),
+        bag.display()
+    );
+    let mut suite = Suite::start(&launch)?;
+    let plan = Plan {
+        namespace: namespace.clone(),
+        tasks,
+        episodes: args.episodes,
+        seed: args.seed,
+        policy,
+        wait_for_recorder: true,
+    };
+    let progress = Progress::new(total);
+    let result = drive(&plan, &mut suite, |o| progress.episode(o));
+    progress.finish();
+    let clean = suite.stop();
+    let outcomes = result?;
+    if !clean {
+        return Err("some nodes did not shut down cleanly (see above)".into());
+    }
+    let rows: Vec<Episode> = outcomes.iter().map(|o| row(&namespace, o)).collect();
+    write(&out.join("episodes.csv"), &episodes_csv(&rows))?;
+    let json: Vec<_> = rows.iter().map(Episode::json).collect();
+    write(
+        &out.join("episodes.json"),
+        &serde_json::to_string_pretty(&json).unwrap_or_default(),
+    )?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json).unwrap_or_default()
+        );
+    } else {
+        print!("{}", summary(&outcomes));
+        println!(
+            "wrote {}: bag/ (composuite bag info {}), episodes.csv, episodes.json",
+            out.display(),
+            bag.display()
+        );
+    }
+    if outcomes.iter().any(|o| !o.identical) {
+        return Err("the suite's observations differ from the in-process environment".into());
+    }
+    Ok(())
+}
+
+/// The session's row of an episode, in the table `composuite bag episodes` recomputes from
+/// the bag.
+fn row(namespace: &str, o: &EpisodeOutcome) -> Episode {
+    Episode {
+        namespace: namespace.into(),
+        episode: o.episode,
+        task: o.task.to_string(),
+        seed: o.seed,
+        length: o.steps,
+        episode_return: o.episode_return,
+        success: o.first_success.is_some(),
+        furthest_stage: o.furthest_stage,
+        done: true,
+        reason: o.reason.clone(),
+    }
+}
+
+fn write(path: &Path, text: &str) -> Result<(), String> {
+    std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// Per task: episodes, success rate, mean return, mean length; then the whole session.
+fn summary(outcomes: &[EpisodeOutcome]) -> String {
+    let mut out = format!(
+        "{:<40} {:>8} {:>8} {:>11} {:>11}\n",
+        "task", "episodes", "success", "mean return", "mean length"
+    );
+    let mut tasks: Vec<TaskSpec> = Vec::new();
+    for o in outcomes {
+        if !tasks.contains(&o.task) {
+            tasks.push(o.task);
+        }
+    }
+    let line = |name: &str, of: &[&EpisodeOutcome]| {
+        let n = of.len().max(1) as f64;
+        let successes = of.iter().filter(|o| o.first_success.is_some()).count();
+        format!(
+            "{:<40} {:>8} {:>7.0}% {:>11.2} {:>11.1}\n",
+            name,
+            of.len(),
+            100.0 * successes as f64 / n,
+            of.iter().map(|o| o.episode_return).sum::<f64>() / n,
+            of.iter().map(|o| f64::from(o.steps)).sum::<f64>() / n
+        )
+    };
+    for task in &tasks {
+        let of: Vec<&EpisodeOutcome> = outcomes.iter().filter(|o| o.task == *task).collect();
+        out.push_str(&line(&task.to_string(), &of));
+    }
+    if tasks.len() > 1 {
+        let all: Vec<&EpisodeOutcome> = outcomes.iter().collect();
+        out.push_str(&line("all", &all));
+    }
+    out
+}
+
+/// The progress bar: episodes done, steps/s, success so far.
+struct Progress {
+    bar: indicatif::ProgressBar,
+    started: Instant,
+    state: std::cell::Cell<(u64, u64, u64)>,
+}
+
+impl Progress {
+    fn new(total: u64) -> Progress {
+        let bar = indicatif::ProgressBar::new(total);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:30} {pos}/{len} episodes  {msg}  [{elapsed_precise}, eta {eta}]",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Progress {
+            bar,
+            started: Instant::now(),
+            state: std::cell::Cell::new((0, 0, 0)),
+        }
+    }
+
+    fn episode(&self, o: &EpisodeOutcome) {
+        let (episodes, steps, successes) = self.state.get();
+        let state = (
+            episodes + 1,
+            steps + u64::from(o.steps),
+            successes + u64::from(o.first_success.is_some()),
+        );
+        self.state.set(state);
+        let rate = state.1 as f64 / self.started.elapsed().as_secs_f64();
+        let message = format!("{rate:.0} steps/s, success {}/{}", state.2, state.0);
+        if self.bar.is_hidden() {
+            // Not a terminal (a log file, CI): one line per episode instead of a bar.
+            eprintln!(
+                "episode {}/{}: {} seed {}: {} in {} steps, return {:.2}; {message}",
+                state.0,
+                self.bar.length().unwrap_or(0),
+                o.task,
+                o.seed,
+                if o.first_success.is_some() {
+                    "success"
+                } else {
+                    "no success"
+                },
+                o.steps,
+                o.episode_return
+            );
+        }
+        self.bar.set_message(message);
+        self.bar.inc(1);
+    }
+
+    fn finish(&self) {
+        self.bar.finish();
+    }
+}
