@@ -11,7 +11,7 @@ use mcap::records::{MessageHeader, Record};
 
 use super::metadata::{BagMetadata, FileInfo, NO_START, TopicInfo};
 use super::qos::profiles_from_yaml;
-use super::writer::{BagError, write_metadata_file};
+use super::writer::{BagError, BagOptions, bag_metadata, write_metadata_file};
 
 /// One recorded message, as the reader hands it out.
 #[derive(Debug)]
@@ -180,19 +180,12 @@ pub fn reindex(dir: &Path) -> Result<ReindexReport, BagError> {
             message_count: counts.values().sum(),
         });
     }
-    let mut metadata = BagMetadata::empty(&ros_distro);
-    metadata.custom_data = custom_data;
-    metadata.topics = topics;
-    metadata.message_count = infos.iter().map(|f| f.message_count).sum();
-    let spans = infos
-        .iter()
-        .filter(|f| f.message_count > 0)
-        .map(|f| (f.starting_time_ns, f.starting_time_ns + f.duration_ns));
-    if let Some((start, end)) = spans.reduce(|(a, b), (c, d)| (a.min(c), b.max(d))) {
-        metadata.starting_time_ns = start;
-        metadata.duration_ns = end - start;
-    }
-    metadata.files = infos;
+    let options = BagOptions {
+        ros_distro,
+        custom_data,
+        ..BagOptions::default()
+    };
+    let metadata = bag_metadata(&topics, infos, &options);
     write_metadata_file(dir, &metadata)?;
     Ok(ReindexReport {
         metadata,
