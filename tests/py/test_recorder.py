@@ -49,14 +49,23 @@ class RecordingAgent(LockstepClient):
         self.statuses = self.agent.subscribe("episode", "composuite_msgs/msg/EpisodeStatus")
         self.launched = launched
 
+    def wait_for_suite(self, command_readers: int = 2) -> None:
+        """Until the services answer and every topic this agent uses is matched both ways (a
+        volatile sample published before the writer knew our reader is not ours), with
+        `command_readers` readers of joint_command (the sim, and the recorder when it runs)."""
+        self.reset_client.wait_for_service(timeout=20)
+        self.command.wait_for_subscribers(command_readers, timeout=20)
+        for topic in (self.observations, self.rewards, self.statuses, self.worlds, self.states):
+            topic.wait_for_publishers(timeout=20)
+        time.sleep(0.5)
+
     def wait_until_recorded(self) -> None:
         """Until the recorder subscribed to every topic of the environment (it logs each), plus a
         moment for its readers to match: messages sent before that are not the session's."""
-        self.reset_client.wait_for_service(timeout=20)
-        self.command.wait_for_subscribers(2, timeout=20)  # the sim and the recorder
+        self.wait_for_suite()
         for topic in ENV_TOPICS:
-            self.launched.wait_for_log(f"recording {NS}/{topic} ")
-        time.sleep(1.0)
+            self.launched.wait_for_log(f"recording {self.launched.namespace}/{topic} ")
+        time.sleep(0.5)
 
     def run_episodes(self) -> int:
         """Run EPISODES; the stamp (ns) of the first reset's observation."""
@@ -222,11 +231,7 @@ def test_sigterm_closes_and_sigkill_leaves_a_bag_reindex_restores(tmp_path):
         launched = Launched(tmp_path, f"{NS}_{how.name.lower()}", TASK, "--record", str(bag))
         agent = RecordingAgent(launched)
         try:
-            agent.reset_client.wait_for_service(timeout=20)
-            agent.command.wait_for_subscribers(2, timeout=20)
-            launched.wait_for_log(f"recording {launched.namespace}/observation ")
-            launched.wait_for_log(f"recording {launched.namespace}/joint_command ")
-            time.sleep(1.0)
+            agent.wait_until_recorded()
             reply = agent.reset(seed=5)
             since = ns_of(reply.observation.header.stamp)
             for _ in range(60):
@@ -272,6 +277,7 @@ def test_bad_record_targets_are_named_and_the_suite_keeps_serving(tmp_path):
     try:
         launched.wait_for_log("the suite goes on without recording")
         assert "cannot create bag directory /proc/composuite-bag" in launched.text()
+        agent.wait_for_suite(command_readers=1)
         agent.reset(seed=1)
         for _ in range(3):
             agent.step(agent.home)

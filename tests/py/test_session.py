@@ -7,8 +7,12 @@ Only run inside scripts/netns-isolate."""
 
 import csv
 import json
+import re
+import shutil
 import subprocess
+from pathlib import Path
 
+import msgcheck
 import node_suite
 from test_recorder import bag_messages
 
@@ -47,6 +51,57 @@ def test_a_two_task_session_writes_a_bag_and_a_table_that_agree(tmp_path):
     assert ours == [(r["task"], r["seed"], r["length"], r["return"]) for r in rows]
     commands = [t for t in recorded if t.endswith("/joint_command")]
     assert len(recorded[commands[0]]) == 4 * 40, "every command the agent sent is in the bag"
+
+    # The determinism proof: the bag alone re-simulates bit for bit ...
+    replay = composuite("bag", "replay", str(out / "bag"), "--verify")
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert replay.stdout.count("41 observations and rewards bit-identical") == 4, replay.stdout
+    # ... and a bag with one command changed by 0.01 rad does not.
+    altered = tmp_path / "altered"
+    copy_with_one_command_changed(out / "bag", altered, index=25)
+    replay = composuite("bag", "replay", str(altered), "--verify")
+    assert replay.returncode == 2, replay.stdout + replay.stderr
+    assert replay.stdout.count("DIFFERENT: step 26: observation") == 1, replay.stdout
+    # (Episodes started by launch and by set_task, with no step, replay too: "1 of N".)
+    assert re.search(r"1 of \d+ episodes differ from the recording", replay.stderr), replay.stderr
+
+
+def composuite(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([str(node_suite.node_dir() / "composuite"), *args], capture_output=True, text=True,
+                          timeout=300)
+
+
+def copy_with_one_command_changed(bag: Path, dest: Path, index: int) -> None:
+    """Copy a bag record by record with the `mcap` library (publish and log times kept), adding
+    0.01 rad to the first joint of the `index`-th joint_command."""
+    from mcap.reader import make_reader
+    from mcap.writer import CompressionType, Writer
+
+    store = msgcheck.rosbags_store()
+    dest.mkdir()
+    shutil.copy(bag / "metadata.yaml", dest / "metadata.yaml")
+    for source in bag.glob("*.mcap"):
+        with open(source, "rb") as f, open(dest / source.name, "wb") as g:
+            reader = make_reader(f)
+            writer = Writer(g, compression=CompressionType.ZSTD)
+            writer.start(profile="ros2", library="test_session")
+            summary = reader.get_summary()
+            schemas = {i: writer.register_schema(s.name, s.encoding, s.data) for i, s in summary.schemas.items()}
+            channels = {i: writer.register_channel(c.topic, c.message_encoding, schemas[c.schema_id], c.metadata)
+                        for i, c in summary.channels.items()}
+            seen = 0
+            for _, channel, message in reader.iter_messages(log_time_order=False):
+                data = message.data
+                if channel.topic.endswith("/joint_command"):
+                    if seen == index:
+                        command = store.deserialize_cdr(data, "sensor_msgs/msg/JointState")
+                        command.position = command.position.copy()  # rosbags hands out a read-only view
+                        command.position[0] += 0.01
+                        data = bytes(store.serialize_cdr(command, "sensor_msgs/msg/JointState"))
+                    seen += 1
+                writer.add_message(channels[channel.id], log_time=message.log_time, data=data,
+                                   publish_time=message.publish_time, sequence=message.sequence)
+            writer.finish()
 
 
 def test_the_expert_session_succeeds(tmp_path):

@@ -46,6 +46,16 @@ enum BagCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Re-simulate every recorded lockstep episode in-process from its recorded task, seed and
+    /// commands; with --verify, check that every observation and reward is bit-identical to the
+    /// recorded one (the determinism proof: a bag made by this version passes).
+    Replay {
+        /// The bag directory.
+        bag: PathBuf,
+        /// Compare with the recorded observations and rewards; exit non-zero on a difference.
+        #[arg(long)]
+        verify: bool,
+    },
     /// Rebuild metadata.yaml from the MCAP files (a bag whose recorder was killed has none);
     /// a file without its summary is first rewritten from its complete chunks.
     Reindex {
@@ -75,6 +85,7 @@ pub fn run(args: &BagArgs) -> Result<(), String> {
             }
             Ok(())
         }
+        BagCommand::Replay { bag, verify } => crate::replay::run(bag, *verify),
         BagCommand::Reindex { bag } => {
             let report = reindex(bag).map_err(|e| e.0)?;
             for (file, why) in &report.recovered {
@@ -227,12 +238,7 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
     let mut found: Vec<Episode> = Vec::new();
     let mut index: BTreeMap<(String, u32, u64), usize> = BTreeMap::new();
     let mut stages: BTreeMap<(String, u32), i8> = BTreeMap::new();
-    let namespace_of = |topic: &str| -> String {
-        match topic.rsplit_once('/') {
-            Some(("", _)) | None => "/".into(),
-            Some((ns, _)) => ns.into(),
-        }
-    };
+
     let truncated = for_each_message(bag, |m| {
         match m.type_name {
             "composuite_msgs/msg/EpisodeStatus" => {
@@ -294,6 +300,14 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
         }
     }
     Ok(found)
+}
+
+/// The namespace of a topic (`/env_00/reward` → `/env_00`, `/reward` → `/`).
+pub fn namespace_of(topic: &str) -> String {
+    match topic.rsplit_once('/') {
+        Some(("", _)) | None => "/".into(),
+        Some((ns, _)) => ns.into(),
+    }
 }
 
 /// The table as CSV (one header line).

@@ -18,6 +18,10 @@ use composuite_ros::ros_args::is_valid_name;
 
 /// How long nodes get to exit after SIGINT before they are killed.
 const GRACE: Duration = Duration::from_secs(5);
+/// With a recorder: how long the environments keep running after the last command before they
+/// are stopped, so reliable DDS can resend whatever the recorder missed (RustDDS heartbeats a
+/// lagging reader every 100 ms); a node that exits takes its unacknowledged samples with it.
+const RECORDER_SETTLE: Duration = Duration::from_secs(1);
 
 /// Start the node suite headless: N environments × (task_manager, sim, reward).
 ///
@@ -471,6 +475,9 @@ fn stop_all(nodes: &mut [Running]) -> bool {
         .iter_mut()
         .filter(|n| n.died_at.is_none())
         .partition(|n| n.kind == NodeKind::Recorder);
+    if !recorders.is_empty() && !environments.is_empty() {
+        std::thread::sleep(RECORDER_SETTLE);
+    }
     let clean = stop_group(environments);
     stop_group(recorders) && clean
 }

@@ -8,6 +8,7 @@ mod demo;
 mod drive;
 mod expert;
 mod launch;
+mod replay;
 mod session;
 mod tasks;
 
