@@ -11,12 +11,14 @@ use composuite_msgs::{cdr, msg};
 use composuite_ros::bag::reader::{for_each_message, read_metadata, reindex};
 use serde_json::json;
 
-/// Read a recorded session: info, its episodes, reindex after a crash.
+/// Read a recorded session from its bag alone: info, episodes, replay, export, reindex.
 ///
 /// Examples:
-///   composuite bag info runs/session
-///   composuite bag episodes runs/session --csv episodes.csv
-///   composuite bag reindex runs/session
+///   composuite bag info runs/s1/bag
+///   composuite bag episodes runs/s1/bag --csv episodes.csv
+///   composuite bag replay runs/s1/bag --verify
+///   composuite bag export runs/s1/bag --topics /ns/reward --format csv --out exported
+///   composuite bag reindex runs/s1/bag
 #[derive(Args, Debug)]
 pub struct BagArgs {
     #[command(subcommand)]
@@ -56,6 +58,21 @@ enum BagCommand {
         #[arg(long)]
         verify: bool,
     },
+    /// Write chosen topics (all by default) to one file per topic in --out: JSON lines
+    /// ({"log_time", "publish_time", "message"}) or CSV (the message flattened: a.b, a[i]).
+    Export {
+        /// The bag directory.
+        bag: PathBuf,
+        /// Topics to export (full names); default: every topic.
+        #[arg(long, num_args = 1..)]
+        topics: Vec<String>,
+        /// jsonl or csv.
+        #[arg(long, value_enum, default_value = "jsonl")]
+        format: crate::export::Format,
+        /// Output directory (created; existing files are never overwritten).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Rebuild metadata.yaml from the MCAP files (a bag whose recorder was killed has none);
     /// a file without its summary is first rewritten from its complete chunks.
     Reindex {
@@ -86,6 +103,12 @@ pub fn run(args: &BagArgs) -> Result<(), String> {
             Ok(())
         }
         BagCommand::Replay { bag, verify } => crate::replay::run(bag, *verify),
+        BagCommand::Export {
+            bag,
+            topics,
+            format,
+            out,
+        } => crate::export::run(bag, topics, *format, out),
         BagCommand::Reindex { bag } => {
             let report = reindex(bag).map_err(|e| e.0)?;
             for (file, why) in &report.recovered {

@@ -7,6 +7,7 @@ mod bench;
 mod demo;
 mod drive;
 mod expert;
+mod export;
 mod launch;
 mod replay;
 mod session;
