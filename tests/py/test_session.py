@@ -36,6 +36,8 @@ def test_a_two_task_session_writes_a_bag_and_a_table_that_agree(tmp_path):
     assert [(r["task"], r["seed"], r["length"]) for r in rows] == [
         (t, str(s), "40") for t in TASKS for s in (7, 8)]
     assert json.loads((out / "episodes.json").read_text())[0]["task"] == TASKS[0]
+    assert png_size(out / "rewards.png") == (1000, 600)
+    assert png_size(out / "success.png") == (1000, 120 + 32 * len(TASKS)), "one bar per task"
     from_bag = subprocess.run([str(node_suite.node_dir() / "composuite"), "bag", "episodes", str(out / "bag"),
                                "--csv", str(tmp_path / "from_bag.csv")], capture_output=True, text=True)
     assert from_bag.returncode == 0, from_bag.stderr
@@ -79,6 +81,13 @@ def test_a_two_task_session_writes_a_bag_and_a_table_that_agree(tmp_path):
     assert replay.stdout.count("DIFFERENT: step 26: observation") == 1, replay.stdout
     # (Episodes started by launch and by set_task, with no step, replay too: "1 of N".)
     assert re.search(r"1 of \d+ episodes differ from the recording", replay.stderr), replay.stderr
+
+
+def png_size(path: Path) -> tuple[int, int]:
+    """Width and height from a PNG's IHDR chunk (and that it is a PNG at all)."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR", path
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
 
 
 def composuite(*args: str) -> subprocess.CompletedProcess:

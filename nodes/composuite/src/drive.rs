@@ -152,6 +152,8 @@ pub struct EpisodeOutcome {
     pub identical: bool,
     /// Lockstep steps per second over the episode.
     pub steps_per_s: f64,
+    /// The staged reward of every step (step 1 first).
+    pub rewards: Vec<f64>,
 }
 
 /// Play the plan on a running suite; `each` is called after every episode.
@@ -219,6 +221,7 @@ pub fn drive(
                     reason: String::new(),
                     identical: bits(&reply.observation.flat) == bits(&first.flat()),
                     steps_per_s: 0.0,
+                    rewards: Vec::new(),
                 };
                 let mut policy = Policy::new(plan.policy, task, seed, &twin);
                 let started = Instant::now();
@@ -264,6 +267,7 @@ pub fn drive(
                     outcome.identical &= bits(&o.flat) == bits(&step.observation.flat())
                         && r.total.to_bits() == step.reward.to_bits();
                     outcome.episode_return += r.total;
+                    outcome.rewards.push(r.total);
                     outcome.furthest_stage = outcome.furthest_stage.max(r.current_stage);
                     if r.success && outcome.first_success.is_none() {
                         outcome.first_success = Some(key.1);

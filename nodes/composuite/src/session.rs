@@ -1,7 +1,8 @@
 //! `composuite session`: one headless, recorded session. It launches one lockstep environment
 //! and the recorder, drives tasks × episodes with a built-in policy through the ROS interfaces
 //! (see `drive`), and leaves in `--out`: the rosbag2 bag of everything on the wire (`bag/`),
-//! the per-episode table as CSV and JSON, and a printed summary.
+//! the per-episode table as CSV and JSON, PNG plots (staged reward per episode, success per
+//! task), and a printed summary.
 
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
@@ -19,7 +20,8 @@ use crate::launch::{LaunchArgs, Suite};
 /// every --tasks × --episodes (seeds --seed, --seed+1, ...) with --policy over ROS 2 (set_task,
 /// reset, joint_command; observation, reward, episode). Writes into --out: `bag/` (rosbag2,
 /// MCAP: every topic, the agent's commands included), `episodes.csv` and `episodes.json` (task,
-/// seed, length, return, success, furthest stage per episode), and prints a summary. Every
+/// seed, length, return, success, furthest stage per episode), `rewards.png` (each episode's
+/// staged reward over time) and `success.png` (success per task), and prints a summary. Every
 /// observation is checked against the in-process environment given the same commands.
 ///
 /// Examples:
@@ -117,6 +119,7 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
         &out.join("episodes.json"),
         &serde_json::to_string_pretty(&json).unwrap_or_default(),
     )?;
+    draw_plots(&out, &outcomes)?;
     if args.json {
         println!(
             "{}",
@@ -125,7 +128,7 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     } else {
         print!("{}", summary(&outcomes));
         println!(
-            "wrote {}: bag/ (composuite bag info {}), episodes.csv, episodes.json",
+            "wrote {}: bag/ (composuite bag info {}), episodes.csv, episodes.json, rewards.png, success.png",
             out.display(),
             bag.display()
         );
@@ -151,6 +154,27 @@ fn row(namespace: &str, o: &EpisodeOutcome) -> Episode {
         done: true,
         reason: o.reason.clone(),
     }
+}
+
+/// `rewards.png` (each episode's staged reward over time) and `success.png` (success rate per
+/// task).
+fn draw_plots(out: &Path, outcomes: &[EpisodeOutcome]) -> Result<(), String> {
+    let curves: Vec<(String, Vec<f64>)> = outcomes
+        .iter()
+        .map(|o| (format!("{} seed {}", o.task, o.seed), o.rewards.clone()))
+        .collect();
+    crate::plots::reward_curves(&out.join("rewards.png"), "Staged reward per step", &curves)?;
+    let mut tasks: Vec<(String, f64)> = Vec::new();
+    for o in outcomes {
+        let name = o.task.to_string();
+        if !tasks.iter().any(|(t, _)| *t == name) {
+            let of: Vec<&EpisodeOutcome> = outcomes.iter().filter(|x| x.task == o.task).collect();
+            let rate =
+                of.iter().filter(|x| x.first_success.is_some()).count() as f64 / of.len() as f64;
+            tasks.push((name, rate));
+        }
+    }
+    crate::plots::success_bars(&out.join("success.png"), "Success per task", &tasks)
 }
 
 fn write(path: &Path, text: &str) -> Result<(), String> {
