@@ -205,6 +205,11 @@ def test_an_agent_killed_mid_episode_leaves_the_suite_serving_the_next(launched,
     finally:
         if first_agent.poll() is None:
             first_agent.kill()
+    # The killed agent's last command may still be on its way to the sim; a reset sent at once can
+    # overtake it (the sim serves scene before joint_command), and the old command then steps the
+    # new episode (seen once in CI under load). Known race, see the issue notes; the next agent
+    # here starts a moment later, as a real one would.
+    time.sleep(1.0)
     stepper.reset(seed=8)
     for _ in range(30):
         stepper.random_step()
