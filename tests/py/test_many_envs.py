@@ -11,6 +11,7 @@ import random
 import signal
 import subprocess
 import threading
+import time
 
 import pytest
 
@@ -73,6 +74,11 @@ class EnvAgent(LockstepClient):
             for client in (self.set_task, self.reset_client):
                 client.wait_for_service(timeout=30)
             self.command.wait_for_subscribers(timeout=30)
+            # Matched both ways before the first step: a volatile reward published before its
+            # writer knew this reader is not delivered (seen in CI under load).
+            for topic in (self.observations, self.rewards, self.states):
+                topic.wait_for_publishers(timeout=30)
+            time.sleep(0.5)
             robot, obj, obstacle, objective = self.task.split("/")
             answer = self.set_task.call(robot=robot, object=obj, obstacle=obstacle, objective=objective,
                                         timeout=10)
