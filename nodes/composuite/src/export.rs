@@ -2,14 +2,14 @@
 //! decoded with the msgs crate's types (every field by its `.msg` name, in name order). A CSV row is
 //! one message flattened: nested fields as `a.b`, array elements as `a[i]`.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use composuite_msgs::{MessageVisitor, RosMessage, cdr};
 use composuite_ros::bag::reader::{for_each_message, read_metadata};
-use serde_json::{Map, Value, json};
+use serde_json::{Value, json};
 
 /// The output format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -155,16 +155,16 @@ pub fn run(bag: &Path, topics: &[String], format: Format, out_dir: &Path) -> Res
                 if f.count == 0 {
                     writeln!(f.out, "{}", header.join(",")).map_err(io)?;
                 }
-                let cells: Map<String, Value> = row
-                    .iter()
-                    .map(|(k, v)| (k.clone(), Value::String(v.clone())))
-                    .collect();
-                if cells.len() != header.len() || header.iter().any(|h| !cells.contains_key(h)) {
+                let cells: HashMap<&str, &str> =
+                    row.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+                if cells.len() != header.len()
+                    || header.iter().any(|h| !cells.contains_key(h.as_str()))
+                {
                     f.mismatched += 1;
                 }
                 let line: Vec<&str> = header
                     .iter()
-                    .map(|h| cells.get(h).and_then(Value::as_str).unwrap_or(""))
+                    .map(|h| cells.get(h.as_str()).copied().unwrap_or(""))
                     .collect();
                 writeln!(f.out, "{}", line.join(",")).map_err(io)?;
             }

@@ -164,17 +164,29 @@ fn draw_plots(out: &Path, outcomes: &[EpisodeOutcome]) -> Result<(), String> {
         .map(|o| (format!("{} seed {}", o.task, o.seed), o.rewards.clone()))
         .collect();
     crate::plots::reward_curves(&out.join("rewards.png"), "Staged reward per step", &curves)?;
-    let mut tasks: Vec<(String, f64)> = Vec::new();
+    let tasks: Vec<(String, f64)> = by_task(outcomes)
+        .iter()
+        .map(|(task, of)| (task.to_string(), success_rate(of)))
+        .collect();
+    crate::plots::success_bars(&out.join("success.png"), "Success per task", &tasks)
+}
+
+/// The outcomes grouped by task, tasks in the order they were played.
+fn by_task(outcomes: &[EpisodeOutcome]) -> Vec<(TaskSpec, Vec<&EpisodeOutcome>)> {
+    let mut groups: Vec<(TaskSpec, Vec<&EpisodeOutcome>)> = Vec::new();
     for o in outcomes {
-        let name = o.task.to_string();
-        if !tasks.iter().any(|(t, _)| *t == name) {
-            let of: Vec<&EpisodeOutcome> = outcomes.iter().filter(|x| x.task == o.task).collect();
-            let rate =
-                of.iter().filter(|x| x.first_success.is_some()).count() as f64 / of.len() as f64;
-            tasks.push((name, rate));
+        match groups.iter_mut().find(|(task, _)| *task == o.task) {
+            Some((_, of)) => of.push(o),
+            None => groups.push((o.task, vec![o])),
         }
     }
-    crate::plots::success_bars(&out.join("success.png"), "Success per task", &tasks)
+    groups
+}
+
+/// The share of episodes with a success (0 for none).
+fn success_rate(of: &[&EpisodeOutcome]) -> f64 {
+    let successes = of.iter().filter(|o| o.first_success.is_some()).count();
+    successes as f64 / of.len().max(1) as f64
 }
 
 fn write(path: &Path, text: &str) -> Result<(), String> {
@@ -187,27 +199,20 @@ fn summary(outcomes: &[EpisodeOutcome]) -> String {
         "{:<40} {:>8} {:>8} {:>11} {:>11}\n",
         "task", "episodes", "success", "mean return", "mean length"
     );
-    let mut tasks: Vec<TaskSpec> = Vec::new();
-    for o in outcomes {
-        if !tasks.contains(&o.task) {
-            tasks.push(o.task);
-        }
-    }
+    let tasks = by_task(outcomes);
     let line = |name: &str, of: &[&EpisodeOutcome]| {
         let n = of.len().max(1) as f64;
-        let successes = of.iter().filter(|o| o.first_success.is_some()).count();
         format!(
             "{:<40} {:>8} {:>7.0}% {:>11.2} {:>11.1}\n",
             name,
             of.len(),
-            100.0 * successes as f64 / n,
+            100.0 * success_rate(of),
             of.iter().map(|o| o.episode_return).sum::<f64>() / n,
             of.iter().map(|o| f64::from(o.steps)).sum::<f64>() / n
         )
     };
-    for task in &tasks {
-        let of: Vec<&EpisodeOutcome> = outcomes.iter().filter(|o| o.task == *task).collect();
-        out.push_str(&line(&task.to_string(), &of));
+    for (task, of) in &tasks {
+        out.push_str(&line(&task.to_string(), of));
     }
     if tasks.len() > 1 {
         let all: Vec<&EpisodeOutcome> = outcomes.iter().collect();

@@ -31,9 +31,14 @@ pub struct RecordedMessage<'a> {
 /// The storage files of a bag: from `metadata.yaml` when there is one, else every
 /// `<name>_<N>.mcap` in numeric order (rosbag2's naming).
 pub fn data_files(dir: &Path) -> Result<Vec<PathBuf>, BagError> {
-    if let Ok(metadata) = read_metadata(dir) {
-        return Ok(metadata.files.iter().map(|f| dir.join(&f.path)).collect());
+    match read_metadata(dir) {
+        Ok(metadata) => Ok(metadata.files.iter().map(|f| dir.join(&f.path)).collect()),
+        Err(_) => numbered_files(dir),
     }
+}
+
+/// Every `<name>_<N>.mcap` of `dir` in numeric order, whatever `metadata.yaml` says.
+fn numbered_files(dir: &Path) -> Result<Vec<PathBuf>, BagError> {
     let entries = std::fs::read_dir(dir)
         .map_err(|e| BagError(format!("cannot read bag directory {}: {e}", dir.display())))?;
     let mut numbered = Vec::new();
@@ -110,36 +115,21 @@ pub struct ReindexReport {
 /// Rebuild `metadata.yaml` from the bag's MCAP files; first restore the summary and indexes of
 /// any file that lacks them.
 pub fn reindex(dir: &Path) -> Result<ReindexReport, BagError> {
-    let files = {
-        // Ignore an old metadata.yaml: it may be what is wrong.
-        let saved = dir.join("metadata.yaml");
-        let aside = dir.join(".metadata.yaml.old");
-        let had = saved.exists();
-        if had {
-            std::fs::rename(&saved, &aside)
-                .map_err(|e| BagError(format!("cannot move {} aside: {e}", saved.display())))?;
-        }
-        let files = data_files(dir);
-        if had {
-            let _ = std::fs::rename(&aside, &saved);
-        }
-        files?
-    };
+    // The files on disk, not an old metadata.yaml's list: that may be what is wrong.
+    let files = numbered_files(dir)?;
     let mut recovered = Vec::new();
     let mut topics: Vec<TopicInfo> = Vec::new();
     let mut infos = Vec::new();
     let mut ros_distro = String::new();
     let mut custom_data = BTreeMap::new();
     for path in files {
-        let complete = {
-            let map = map_file(&path)?;
-            has_summary(&map)
-        };
-        if !complete {
+        let mut map = map_file(&path)?;
+        if !has_summary(&map) {
+            drop(map);
             let why = recover_file(&path)?;
             recovered.push((path.clone(), why));
+            map = map_file(&path)?;
         }
-        let map = map_file(&path)?;
         let mut counts: HashMap<u16, u64> = HashMap::new();
         let mut span: Option<(u64, u64)> = None;
         let scan = scan(&map, |channel, header, _| {
