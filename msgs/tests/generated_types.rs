@@ -172,6 +172,19 @@ fn jazzy_type_hashes_pinned() {
             std_msgs::msg::Bool::TYPE_HASH,
             "feb91e995ff9ebd09c0cb3d2aed18b11077585839fb5db80193b62d74528f6c9",
         ),
+        // The `reference_action` topic's type (and ros2_control's forward controllers').
+        (
+            std_msgs::msg::Float64MultiArray::TYPE_HASH,
+            "1025ddc6b9552d191f89ef1a8d2f60f3d373e28b283d8891ddcc974e8c55397f",
+        ),
+        (
+            std_msgs::msg::MultiArrayLayout::TYPE_HASH,
+            "4c66e6f78e740ac103a94cf63259f968e48c617e7699e829b63c21a5cb50dac6",
+        ),
+        (
+            std_msgs::msg::MultiArrayDimension::TYPE_HASH,
+            "5e773a60a4c7fc8a54985f307c7837aa2994252a126c301957a24e31282c9cbe",
+        ),
         (
             sensor_msgs::msg::JointState::TYPE_HASH,
             "a13ee3a330e346c9d87b5aa18d24e11690752bd33a0350f11c5882bc9179260e",

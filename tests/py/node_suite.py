@@ -131,10 +131,12 @@ def require_isolation() -> None:
 
 
 class Launched:
-    """`composuite launch` of one environment of `task` in `namespace` (cyclone service format,
-    `extra` launch options after), its output in a file."""
+    """`composuite launch` of one environment of `task` in `namespace` (service format
+    `service_mapping`: cyclone for the cyclonedds agent, enhanced for rclpy on Fast DDS; `extra`
+    launch options after), its output in a file."""
 
-    def __init__(self, log_dir: Path, namespace: str, task: str, *extra: str):
+    def __init__(self, log_dir: Path, namespace: str, task: str, *extra: str,
+                 service_mapping: str = "cyclone"):
         self.namespace, self.domain = namespace, random_domain()
         self.log = log_dir / "launch.stderr"
         env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
@@ -142,7 +144,7 @@ class Launched:
         with open(self.log, "wb") as stderr:
             self.process = subprocess.Popen(
                 [*suite_launcher(), str(node_dir() / "composuite"), "launch",
-                 "--task", task, "--namespace", namespace, "--service-mapping", "cyclone",
+                 "--task", task, "--namespace", namespace, "--service-mapping", service_mapping,
                  "--log-level", "info", *extra],
                 env=env, stdin=subprocess.DEVNULL, stdout=stderr, stderr=stderr)
 

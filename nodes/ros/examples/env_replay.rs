@@ -8,7 +8,8 @@
 //! `episode.json` is `{"task": "R/O/B/J", "seed": S, "horizon": H?, "task_observation": B?,
 //! "commands": [{"joints": [7 rad], "gripper": [opening m, effort N] | null, "finger": q?}, ...]}`
 //! — the same commands an agent sends as `joint_command` (+ `gripper_command` before it; or
-//! `finger`, the `l_finger_joint` target (m) put into `joint_command` itself). Each output line is
+//! `finger`, the `l_finger_joint` target (m) put into `joint_command` itself), or
+//! `{"reference": [8 values]}`, what an agent sends as `reference_action`. Each output line is
 //! `{"step", "flat", "reward", "success", "terminated", "truncated"}`; floats print with
 //! round-trip precision, so Python reads back the exact bits.
 
@@ -70,27 +71,15 @@ fn run() -> Result<(), String> {
         .iter()
         .enumerate()
     {
-        let joints: Vec<f64> = serde_json::from_value(command["joints"].clone())
-            .map_err(|e| format!("command {i}: joints: {e}"))?;
-        let joints: [f64; 7] = joints
-            .try_into()
-            .map_err(|_| format!("command {i}: 7 joints expected"))?;
-        let gripper = match &command["gripper"] {
-            // A finger joint target in joint_command: the sim turns it into this opening.
-            Value::Null if command["finger"].is_f64() => Some((
-                composuite_core::physics::pad_gap(command["finger"].as_f64().unwrap_or(0.0)),
-                0.0,
-            )),
-            Value::Null => None,
-            g => {
-                let g: [f64; 2] =
-                    serde_json::from_value(g.clone()).map_err(|e| format!("command {i}: {e}"))?;
-                Some((g[0], g[1]))
+        let action = match &command["reference"] {
+            Value::Null => absolute_action(i, command)?,
+            values => {
+                let values: [f64; 8] = serde_json::from_value(values.clone())
+                    .map_err(|e| format!("command {i}: reference: 8 numbers expected: {e}"))?;
+                Action::Reference(values)
             }
         };
-        let step = env
-            .step(&Action::Absolute { joints, gripper })
-            .map_err(|e| format!("command {i}: {e}"))?;
+        let step = env.step(&action).map_err(|e| format!("command {i}: {e}"))?;
         println!(
             "{}",
             json!({"step": i + 1, "flat": step.observation.flat(), "reward": step.reward,
@@ -102,6 +91,29 @@ fn run() -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// A `{"joints", "gripper"?, "finger"?}` command as the sim node turns it into an action.
+fn absolute_action(i: usize, command: &Value) -> Result<Action, String> {
+    let joints: Vec<f64> = serde_json::from_value(command["joints"].clone())
+        .map_err(|e| format!("command {i}: joints: {e}"))?;
+    let joints: [f64; 7] = joints
+        .try_into()
+        .map_err(|_| format!("command {i}: 7 joints expected"))?;
+    let gripper = match &command["gripper"] {
+        // A finger joint target in joint_command: the sim turns it into this opening.
+        Value::Null if command["finger"].is_f64() => Some((
+            composuite_core::physics::pad_gap(command["finger"].as_f64().unwrap_or(0.0)),
+            0.0,
+        )),
+        Value::Null => None,
+        g => {
+            let g: [f64; 2] =
+                serde_json::from_value(g.clone()).map_err(|e| format!("command {i}: {e}"))?;
+            Some((g[0], g[1]))
+        }
+    };
+    Ok(Action::Absolute { joints, gripper })
 }
 
 fn expert(task: &str, seed: &str) -> Result<(), String> {

@@ -5,6 +5,9 @@
 pub const JOINT_STATES: &str = "joint_states";
 /// Absolute joint position targets by name (sensor_msgs/JointState), agents → sim.
 pub const JOINT_COMMAND: &str = "joint_command";
+/// The reference benchmark's 8 action values in [−1, 1] (std_msgs/Float64MultiArray): joint
+/// deltas of 0.05 rad per unit from the measured positions, then the gripper's sign; agents → sim.
+pub const REFERENCE_ACTION: &str = "reference_action";
 /// Gripper opening and effort (control_msgs/GripperCommand), agents → sim.
 pub const GRIPPER_COMMAND: &str = "gripper_command";
 /// Factored observation (composuite_msgs/Observation), sim → agents.

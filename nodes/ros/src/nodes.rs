@@ -67,8 +67,8 @@ const SIM: NodeSpec = NodeSpec {
     name: "sim",
     binary: "sim_node",
     about: "CompoSuite-ROS sim node: owns the physics world of one environment; steps it on \
-            joint_command (lockstep) or on the wall clock (realtime); publishes joint_states, \
-            observation, world_state, clock, tf and robot_description.",
+            joint_command or reference_action (lockstep) or on the wall clock (realtime); \
+            publishes joint_states, observation, world_state, clock, tf and robot_description.",
     params: crate::sim::PARAMS,
 };
 

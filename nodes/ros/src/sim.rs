@@ -5,9 +5,12 @@
 //!   changes, then reset with the scene's seed; the sim time goes on from the scene's stamp
 //!   if that is later (a restarted sim);
 //! - `joint_command` (absolute targets by joint name; may carry the finger joints) and
-//!   `gripper_command` (opening, effort) set the targets;
-//! - `lockstep` mode: each `joint_command` advances exactly one control period, and nothing
-//!   else does; `realtime` mode: a wall-clock timer steps with the last targets held;
+//!   `gripper_command` (opening, effort) set the targets; `reference_action` (8 values in
+//!   [−1, 1]) acts as the reference benchmark's agents do (joint deltas + gripper sign, its
+//!   soft controller), so a Gymnasium agent written for CompoSuite sees the same environment;
+//! - `lockstep` mode: each `joint_command` or `reference_action` advances exactly one control
+//!   period, and nothing else does; `realtime` mode: a wall-clock timer steps with the last
+//!   command held;
 //! - after every step (and at reset): `world_state` first (the reward node's input), then
 //!   `observation`, `joint_states`, `tf`, `clock`, all stamped with the new sim time; when the
 //!   robot changes, the latched `robot_description` and `tf_static` (world → the arm's root link).
@@ -25,7 +28,7 @@ use composuite_msgs::control_msgs::msg::GripperCommand;
 use composuite_msgs::msg;
 use composuite_msgs::rosgraph_msgs::msg::Clock;
 use composuite_msgs::sensor_msgs::msg::JointState;
-use composuite_msgs::std_msgs::msg::String as StringMsg;
+use composuite_msgs::std_msgs::msg::{Float64MultiArray, String as StringMsg};
 use composuite_msgs::tf2_msgs::msg::TFMessage;
 use futures::{FutureExt, StreamExt};
 use ros2_client::dds::Publisher;
@@ -69,7 +72,7 @@ pub const PARAMS: &[ParamSpec] = &[
 /// How the sim advances.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
-    /// One control period per `joint_command`.
+    /// One control period per `joint_command` or `reference_action`.
     Lockstep,
     /// Wall-clock pace, last targets held.
     Realtime,
@@ -104,8 +107,8 @@ struct Running {
     /// Who published that scene. A restarted task manager is another writer whose episode
     /// numbers start again at 1: its scenes are new even where a number repeats.
     scene_writer: Gid,
-    /// Arm targets held between commands (realtime mode steps with them).
-    arm_targets: [f64; ARM_DOF],
+    /// The arm command held between commands (realtime mode steps with it).
+    held: HeldCommand,
     /// A gripper command waiting for the next step.
     gripper: Option<(f64, f64)>,
     /// Joints already reported as clamped this episode (said once).
@@ -113,6 +116,19 @@ struct Running {
     /// Whether "episode over" was already said for this episode.
     over_reported: bool,
 }
+
+/// The last arm command received, which the next step uses.
+#[derive(Debug, Clone, Copy)]
+enum HeldCommand {
+    /// Absolute joint targets (`joint_command`, or the pose at reset).
+    Targets([f64; ARM_DOF]),
+    /// The reference's normalised action (`reference_action`): held like a velocity command,
+    /// each step moves the goal from the joints' measured positions again.
+    Reference([f64; REFERENCE_ACTION_LEN]),
+}
+
+/// Values in a `reference_action`: seven joint deltas and the gripper.
+const REFERENCE_ACTION_LEN: usize = ARM_DOF + 1;
 
 /// Where a step's time goes, summed until it is logged (at debug level, every
 /// [`TIMING_WINDOW`] steps).
@@ -164,6 +180,9 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let command_sub = node
         .subscription::<JointState>(names::JOINT_COMMAND, qos::state())
         .map_err(e)?;
+    let action_sub = node
+        .subscription::<Float64MultiArray>(names::REFERENCE_ACTION, qos::state())
+        .map_err(e)?;
     let gripper_sub = node
         .subscription::<GripperCommand>(names::GRIPPER_COMMAND, qos::state())
         .map_err(e)?;
@@ -188,6 +207,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         let mut scenes = std::pin::pin!(scene_sub.async_stream());
         let mut commands = std::pin::pin!(command_sub.async_stream());
         let mut grippers = std::pin::pin!(gripper_sub.async_stream());
+        let mut actions = std::pin::pin!(action_sub.async_stream());
         let mut ticker = sim.ticker();
         loop {
             futures::select_biased! {
@@ -215,6 +235,10 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                 command = commands.select_next_some() => match command {
                     Ok((command, _)) => sim.on_joint_command(&command, &log),
                     Err(err) => log.warn(format!("unreadable joint_command dropped: {err:?}")),
+                },
+                action = actions.select_next_some() => match action {
+                    Ok((action, _)) => sim.on_reference_action(&action, &log),
+                    Err(err) => log.warn(format!("unreadable reference_action dropped: {err:?}")),
                 },
                 _ = ticker.next().fuse() => sim.step(&log),
             }
@@ -291,12 +315,12 @@ impl Sim {
             log.error(format!("cannot start episode {}: {err}", scene.episode));
             return;
         }
-        let arm_targets = env.world().arm_positions();
+        let held = HeldCommand::Targets(env.world().arm_positions());
         self.run = Some(Running {
             env,
             episode: scene.episode,
             scene_writer: writer,
-            arm_targets,
+            held,
             gripper: None,
             clamp_reported: BTreeSet::new(),
             over_reported: false,
@@ -373,7 +397,7 @@ impl Sim {
             log.warn(format!("joint_command refused: {err}"));
             return;
         }
-        run.arm_targets = arm;
+        run.held = HeldCommand::Targets(arm);
         if let Some(gap) = finger_gap {
             run.gripper = Some((gap, 0.0));
         }
@@ -382,12 +406,49 @@ impl Sim {
         }
     }
 
+    fn on_reference_action(&mut self, action: &Float64MultiArray, log: &crate::node::Logger) {
+        let Some(run) = &mut self.run else {
+            log.warn(
+                "reference_action ignored: no episode yet (the task manager publishes the scene)",
+            );
+            return;
+        };
+        let values: [f64; REFERENCE_ACTION_LEN] = match action.data.as_slice().try_into() {
+            Ok(values) => values,
+            Err(_) => {
+                log.warn(format!(
+                    "reference_action refused: it has {} values; it needs {REFERENCE_ACTION_LEN} \
+                     (7 joint deltas, then the gripper), each in [-1, 1]",
+                    action.data.len()
+                ));
+                return;
+            }
+        };
+        // Out-of-range values are clipped, as the reference does; non-finite ones refused here
+        // so the held command never holds a value the next step would refuse.
+        if let Some((index, value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            log.warn(format!(
+                "reference_action refused: value {index} is {value}; each must be finite \
+                 (it is clipped to [-1, 1])"
+            ));
+            return;
+        }
+        run.held = HeldCommand::Reference(values);
+        if self.mode == Mode::Lockstep {
+            self.step(log);
+        }
+    }
+
     /// One control period with the held targets.
     fn step(&mut self, log: &crate::node::Logger) {
         let Some(run) = &mut self.run else { return };
-        let action = Action::Absolute {
-            joints: run.arm_targets,
-            gripper: run.gripper.take(),
+        let action = match run.held {
+            HeldCommand::Targets(joints) => Action::Absolute {
+                joints,
+                gripper: run.gripper.take(),
+            },
+            // The reference's action carries its own gripper command.
+            HeldCommand::Reference(values) => Action::Reference(values),
         };
         let started = Instant::now();
         let result = run.env.step(&action);

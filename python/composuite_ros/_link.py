@@ -1,0 +1,338 @@
+"""The ROS side of the Gymnasium envs: one rclpy participant, and one `Channel` per environment
+of the suite (per namespace) with its topics, services and what arrived on them.
+
+Lessons this follows (rclpy 7.1.6 on Fast DDS, see the repository's docs/rclpy-agents.md):
+- a private `Context` and an own `SingleThreadedExecutor` polled with `spin_once`: nothing spins
+  in the background, so `close()` leaves no thread, and no `spin_until_future_complete` (it slows
+  down with every service call in that release);
+- every wait has a wall-clock deadline and says what it waited for;
+- step messages are matched by (episode, step), never "the latest message";
+- each side of a DDS match learns of it on its own: a volatile sample sent before the sender
+  knows this reader is lost. Before the first step a channel waits until every topic matched here
+  and a reset's step-0 observation arrived (so the sim's writer knows this reader), and gives the
+  writers that publish nothing at a reset (`reward`, `episode`) a moment to match too.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import rclpy
+from composuite_msgs.msg import EpisodeStatus, Observation, StagedReward
+from composuite_msgs.srv import Reset, SampleTasks, SetTask
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray, String
+
+from .errors import StepLostError, SuiteNotRunningError
+
+# The suite's QoS (ROS defaults): state topics reliable/volatile/keep-last-10; latched topics
+# (robot_description) transient local, keep last 1.
+STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL, history=HistoryPolicy.KEEP_LAST)
+
+ARM_JOINTS = 7
+# How long a service request may stay unanswered before it is sent again, attempt after attempt
+# (a reply sent before the server's reply writer matched this client is lost, see the module
+# doc; that happens on a first call, so the first resend comes soon). Later attempts wait 3 s.
+ATTEMPT_BUDGETS_S = (0.5, 1.0, 2.0)
+LATER_ATTEMPT_S = 3.0
+
+
+def attempt_budget(attempt: int) -> float:
+    return ATTEMPT_BUDGETS_S[attempt] if attempt < len(ATTEMPT_BUDGETS_S) else LATER_ATTEMPT_S
+# How long the step-0 messages of a reset may take to arrive before the reset is asked again.
+STEP0_WAIT_S = 1.0
+# After this participant matched a writer that publishes nothing at a reset (`reward`), how long
+# to give that writer to match this reader before the first step's sample depends on it.
+# Discovery is symmetric (both sides exchange their endpoints at once), so this is generous.
+WRITER_SETTLE_S = 0.5
+
+
+def normalize_namespace(namespace: str) -> str:
+    """`env_00`, `/env_00/` → `/env_00`; `` or `/` → `/`."""
+    parts = [p for p in namespace.split("/") if p]
+    return "/" + "/".join(parts)
+
+
+class Participant:
+    """One rclpy context, node and executor for any number of channels."""
+
+    def __init__(self, node_name: str, domain_id: int | None = None):
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node(node_name, context=self.context,
+                                      start_parameter_services=False)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.closed = False
+
+    def spin_for(self, done: Callable[[], object], seconds: float) -> bool:
+        """Process incoming messages until `done()` or `seconds` passed; whether it is done."""
+        deadline = time.monotonic() + seconds
+        while not done():
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return False
+            self.executor.spin_once(timeout_sec=min(remaining, 0.05))
+        return True
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+
+@dataclass
+class StepMessages:
+    """What one lockstep step produced."""
+
+    observation: Observation
+    reward: StagedReward
+    status: EpisodeStatus
+
+
+class Channel:
+    """One environment of the suite, in `namespace`."""
+
+    def __init__(self, participant: Participant, namespace: str, timeout: float):
+        self.participant = participant
+        self.namespace = normalize_namespace(namespace)
+        self.timeout = timeout
+        node = participant.node
+        prefix = "" if self.namespace == "/" else self.namespace
+        self.observations: dict[tuple[int, int], Observation] = {}
+        self.rewards: dict[tuple[int, int], StagedReward] = {}
+        self.statuses: dict[tuple[int, int], EpisodeStatus] = {}
+        # The latched URDF of each robot seen, by its <robot name> (`iiwa`, `gen3`, ...).
+        self.robot_descriptions: dict[str, str] = {}
+        self.joint_names: list[str] = []
+        self.subscriptions = {
+            "observation": node.create_subscription(
+                Observation, f"{prefix}/observation", self._on_observation, STATE_QOS),
+            "reward": node.create_subscription(
+                StagedReward, f"{prefix}/reward", self._on_reward, STATE_QOS),
+            "episode": node.create_subscription(
+                EpisodeStatus, f"{prefix}/episode", self._on_status, STATE_QOS),
+        }
+        self.joint_states = node.create_subscription(
+            JointState, f"{prefix}/joint_states", self._on_joint_states, STATE_QOS)
+        self.description = node.create_subscription(
+            String, f"{prefix}/robot_description", self._on_description, LATCHED_QOS)
+        self.reference_action = node.create_publisher(
+            Float64MultiArray, f"{prefix}/reference_action", STATE_QOS)
+        self.joint_command = node.create_publisher(JointState, f"{prefix}/joint_command", STATE_QOS)
+        self.reset_client = node.create_client(Reset, f"{prefix}/reset")
+        self.set_task_client = node.create_client(SetTask, f"{prefix}/set_task")
+        self.sample_tasks_client = node.create_client(SampleTasks, f"{prefix}/sample_tasks")
+        # When each subscription first had a matched publisher (for WRITER_SETTLE_S).
+        self._matched_since: dict[str, float] = {}
+        self.episode = 0
+        self.step_count = 0
+
+    # ---- incoming ---------------------------------------------------------------------------
+
+    def _on_observation(self, message: Observation) -> None:
+        if message.episode >= self.episode:
+            self.observations[(message.episode, message.step)] = message
+
+    def _on_reward(self, message: StagedReward) -> None:
+        if message.episode >= self.episode:
+            self.rewards[(message.episode, message.step)] = message
+
+    def _on_status(self, message: EpisodeStatus) -> None:
+        if message.episode >= self.episode:
+            self.statuses[(message.episode, message.step)] = message
+
+    def _on_joint_states(self, message: JointState) -> None:
+        self.joint_names = list(message.name)
+
+    def _on_description(self, message: String) -> None:
+        try:
+            name = ElementTree.fromstring(message.data).get("name", "")
+        except ElementTree.ParseError:
+            return
+        self.robot_descriptions[name.lower()] = message.data
+
+    # ---- readiness --------------------------------------------------------------------------
+
+    def missing(self) -> list[str]:
+        """What this channel still waits for before it can reset and step."""
+        now = time.monotonic()
+        missing = []
+        for name, subscription in self.subscriptions.items():
+            if subscription.get_publisher_count() == 0:
+                missing.append(f"a publisher of {subscription.topic_name}")
+                self._matched_since.pop(name, None)
+            else:
+                self._matched_since.setdefault(name, now)
+        for client in (self.reset_client, self.set_task_client):
+            if not client.service_is_ready():
+                missing.append(f"the {client.srv_name} service")
+        if (self.reference_action.get_subscription_count() == 0
+                or self.joint_command.get_subscription_count() == 0):
+            missing.append(f"the sim's command readers in {self.namespace}")
+        return missing
+
+    def settled(self) -> bool:
+        """Every writer had WRITER_SETTLE_S to match this participant's readers."""
+        now = time.monotonic()
+        return (not self.missing()
+                and all(now - since >= WRITER_SETTLE_S for since in self._matched_since.values()))
+
+    def not_running_error(self, waited_for: str) -> SuiteNotRunningError:
+        missing = self.missing()
+        return SuiteNotRunningError(
+            f"no CompoSuite-ROS environment answered in namespace {self.namespace} within "
+            f"{self.timeout:g} s ({waited_for}; still missing: {', '.join(missing) or 'nothing'}). "
+            "Is `composuite launch` running there, in lockstep mode, with the same ROS_DOMAIN_ID?")
+
+    # ---- services ---------------------------------------------------------------------------
+
+    def call(self, client, request, what: str):
+        """A service call with resends (see ATTEMPT_BUDGETS_S) until `timeout`."""
+        deadline = time.monotonic() + self.timeout
+        if not self.participant.spin_for(client.service_is_ready, self.timeout):
+            raise self.not_running_error(f"waiting for {client.srv_name}")
+        for attempt in itertools.count():
+            future = client.call_async(request)
+            budget = min(attempt_budget(attempt), max(deadline - time.monotonic(), 0.0))
+            if self.participant.spin_for(future.done, budget):
+                return future.result()
+            client.remove_pending_request(future)
+            if time.monotonic() >= deadline:
+                raise self.not_running_error(f"no reply to {what}")
+
+    def set_task(self, task: str):
+        robot, obj, obstacle, objective = task.split("/")
+        reply = self.call(self.set_task_client,
+                          SetTask.Request(robot=robot, object=obj, obstacle=obstacle,
+                                          objective=objective),
+                          f"set_task {task}")
+        if not reply.success:
+            raise ValueError(f"set_task {task} refused in {self.namespace}: {reply.message}")
+        return reply.task
+
+    def sample_tasks(self, experiment: str, num_train: int, element: str, seed: int,
+                     no_shuffle: bool = False):
+        reply = self.call(self.sample_tasks_client,
+                          SampleTasks.Request(experiment=experiment, num_train=num_train,
+                                              element=element, seed=seed, no_shuffle=no_shuffle),
+                          "sample_tasks")
+        if not reply.success:
+            raise ValueError(f"sample_tasks refused: {reply.message}")
+        return reply.train, reply.test
+
+    # ---- episodes ---------------------------------------------------------------------------
+
+    def wait_ready(self) -> None:
+        if not self.participant.spin_for(lambda: not self.missing(), self.timeout):
+            raise self.not_running_error("waiting for the suite's topics and services")
+
+    def start_reset(self, seed: int):
+        """Send a reset request; returns the future."""
+        return self.reset_client.call_async(Reset.Request(seed=seed, use_seed=True))
+
+    def reset(self, seed: int, attempts: int = 5) -> Reset.Response:
+        """Start an episode with `seed`; returns the reply (step-0 observation inside).
+
+        A reset is asked again (same seed: the same start) when its reply or its step-0 messages
+        do not arrive, which only happens while discovery is still settling."""
+        self.wait_ready()
+        for attempt in range(attempts):
+            future = self.start_reset(seed)
+            if not self.participant.spin_for(future.done, min(self.timeout, attempt_budget(attempt))):
+                self.reset_client.remove_pending_request(future)
+                continue
+            reply = self.finish_reset(future)
+            if self.participant.spin_for(self.step0_arrived, STEP0_WAIT_S):
+                self.participant.spin_for(self.settled, 2 * WRITER_SETTLE_S)
+                return reply
+        raise self.not_running_error(f"no reset reply with its step-0 messages after {attempts} attempts")
+
+    def finish_reset(self, future) -> Reset.Response:
+        reply = future.result()
+        if not reply.success:
+            raise RuntimeError(f"reset refused in {self.namespace}: {reply.message}")
+        self.episode, self.step_count = reply.episode, 0
+        # Drop what belongs to earlier episodes; keep what of this one may have come first.
+        for store in (self.observations, self.rewards, self.statuses):
+            for key in [k for k in store if k[0] != reply.episode]:
+                del store[key]
+        return reply
+
+    def step0_arrived(self) -> bool:
+        # The sim publishes the step-0 observation at a reset (`reward` and `episode` start at
+        # step 1: WRITER_SETTLE_S covers those writers).
+        return (self.episode, 0) in self.observations
+
+    def send_reference_action(self, action) -> None:
+        self.reference_action.publish(Float64MultiArray(data=[float(a) for a in action]))
+
+    def send_joint_targets(self, names: list[str], positions) -> None:
+        self.joint_command.publish(JointState(name=names, position=[float(p) for p in positions]))
+
+    def next_key(self) -> tuple[int, int]:
+        return (self.episode, self.step_count + 1)
+
+    def step_arrived(self) -> bool:
+        key = self.next_key()
+        return key in self.observations and key in self.rewards and key in self.statuses
+
+    def take_step(self) -> StepMessages:
+        key = self.next_key()
+        self.step_count += 1
+        return StepMessages(self.observations.pop(key), self.rewards.pop(key), self.statuses.pop(key))
+
+    def step_lost_error(self) -> StepLostError:
+        key = self.next_key()
+        got = [name for name, store in (("observation", self.observations), ("reward", self.rewards),
+                                        ("episode", self.statuses)) if key in store]
+        return StepLostError(
+            f"step {key[1]} of episode {key[0]} in {self.namespace} was lost: "
+            f"{'got ' + ', '.join(got) if got else 'got nothing'} within {self.timeout:g} s "
+            "(observation, reward and episode expected); reset to go on")
+
+    # ---- the robot ----------------------------------------------------------------------------
+
+    def joint_limits(self, robot: str) -> list[tuple[str, float, float]]:
+        """(name, lower, upper) of `robot`'s 7 arm joints then its left finger joint, from the
+        latched `robot_description` URDF the sim publishes when the robot changes."""
+        key = robot.lower()
+        if not self.participant.spin_for(lambda: key in self.robot_descriptions, self.timeout):
+            raise self.not_running_error(f"waiting for robot_description of {robot}")
+        return urdf_joint_limits(self.robot_descriptions[key])
+
+
+def urdf_joint_limits(urdf: str) -> list[tuple[str, float, float]]:
+    """The movable joints of a URDF in document order (revolute arm joints, then the finger
+    joints), first 7 revolute and the first prismatic, with their limits."""
+    root = ElementTree.fromstring(urdf)
+    revolute, prismatic = [], []
+    for joint in root.iter("joint"):
+        kind = joint.get("type")
+        limit = joint.find("limit")
+        lower = float(limit.get("lower", -math.inf)) if limit is not None else -math.inf
+        upper = float(limit.get("upper", math.inf)) if limit is not None else math.inf
+        if kind == "continuous":
+            lower, upper = -math.inf, math.inf
+        if kind in ("revolute", "continuous"):
+            revolute.append((joint.get("name"), lower, upper))
+        elif kind == "prismatic":
+            prismatic.append((joint.get("name"), lower, upper))
+    if len(revolute) != ARM_JOINTS or not prismatic:
+        raise RuntimeError(f"robot_description has {len(revolute)} revolute and {len(prismatic)} "
+                           f"prismatic joints; expected {ARM_JOINTS} and at least 1")
+    return revolute + prismatic[:1]

@@ -1,0 +1,226 @@
+"""The `composuite_ros` Gymnasium package (python/) against `composuite launch`, with the real
+rclpy from ROS 2 Jazzy on Fast DDS: Gymnasium's own env checker, bit-identical episodes against
+the in-process `Env` (env_replay) in both action modes, the vector env over 4 environments with
+2 tasks, autoreset, and every error the package promises."""
+
+from __future__ import annotations
+
+import os
+import threading
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from node_suite import Launched, env_replay_run, float_bits
+
+import composuite_ros
+from composuite_ros import CompoSuiteRosEnv, EpisodeOverError, StepLostError, SuiteNotRunningError
+from composuite_ros.vector import CompoSuiteRosVectorEnv
+
+HORIZON = 40
+# One task per objective (and every robot): what the bit-identity test runs.
+TASKS = ["IIWA/box/no_obstacle/pick_place", "Jaco/dumbbell/object_wall/push",
+         "Gen3/plate/goal_wall/trash_can", "Panda/hollow_box/object_door/shelf"]
+
+
+@pytest.fixture(scope="module")
+def suite(tmp_path_factory):
+    launched = Launched(tmp_path_factory.mktemp("gym"), "/gym", TASKS[0], "--horizon", str(HORIZON),
+                        service_mapping="fastdds")
+    previous = os.environ.get("ROS_DOMAIN_ID")
+    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
+    try:
+        launched.wait_for_log("started")
+        yield launched
+    finally:
+        launched.stop()
+        if previous is None:
+            os.environ.pop("ROS_DOMAIN_ID", None)
+        else:
+            os.environ["ROS_DOMAIN_ID"] = previous
+
+
+@pytest.fixture(scope="module")
+def env(suite):
+    environment = gymnasium.make("composuite_ros/CompoSuite-v0", task=TASKS[0], namespace="/gym")
+    yield environment
+    environment.close()
+
+
+def replay(task: str, seed: int, commands: list[dict], **config) -> list[dict]:
+    return env_replay_run({"task": task, "seed": seed, "horizon": HORIZON, "commands": commands, **config})
+
+
+def test_registered_and_spaces(env):
+    assert "composuite_ros/CompoSuite-v0" in gymnasium.registry
+    assert env.observation_space.shape == (93,) and env.observation_space.dtype == np.float64
+    assert env.action_space.shape == (8,)
+    assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
+
+
+def test_gymnasium_env_checker(env):
+    # Reset determinism, spaces, step return types, seeding: Gymnasium's own checks.
+    check_env(env.unwrapped, skip_render_check=True)
+
+
+@pytest.mark.parametrize("task", TASKS)
+def test_episode_bit_identical_to_in_process_env(env, task):
+    env.unwrapped.set_task(task)
+    rng = np.random.default_rng(7)
+    actions = rng.uniform(-1, 1, size=(HORIZON, 8))
+    observation, info = env.reset(seed=11)
+    assert info["seed"] == 11
+    got = [(observation, 0.0, False, False)]
+    for action in actions:
+        observation, reward, terminated, truncated, info = env.step(action)
+        got.append((observation, reward, terminated, truncated))
+        if terminated or truncated:
+            break
+    assert set(info["stages"]) >= {"reach", "grasp"}
+    expected = replay(task, 11, [{"reference": [float(a) for a in action]} for action in actions])
+    assert len(got) == len(expected), "episode lengths differ"
+    for step, ((obs, reward, terminated, truncated), want) in enumerate(zip(got, expected)):
+        assert float_bits(obs) == float_bits(want["flat"]), f"{task}: observation of step {step} differs"
+        assert float_bits([reward]) == float_bits([want["reward"]]), f"{task}: reward of step {step}"
+        assert (terminated, truncated) == (want["terminated"], want["truncated"]), f"{task}: step {step}"
+    # The horizon truncates (no objective ends these random episodes early).
+    assert got[-1][3] and len(got) == HORIZON + 1
+
+
+def test_absolute_mode_and_77_observations(suite):
+    task = TASKS[3]
+    env = CompoSuiteRosEnv(task, "/gym", action_mode="absolute", use_task_id_obs=False)
+    try:
+        assert env.observation_space.shape == (77,)
+        low, high = env.action_space.low, env.action_space.high
+        assert low.shape == (8,) and np.all(low < high) and high[7] < 0.1  # a finger joint, in m
+        observation, _ = env.reset(seed=5)
+        rng = np.random.default_rng(1)
+        home = np.arctan2(observation[52:59], observation[45:52])  # sin, cos of the 7 joints
+        commands, observations = [], [observation]
+        for _ in range(15):
+            targets = np.clip(np.append(home + rng.uniform(-0.2, 0.2, 7), rng.uniform(low[7], high[7])),
+                              low, high)
+            observations.append(env.step(targets)[0])
+            commands.append({"joints": targets[:7].tolist(), "gripper": None, "finger": float(targets[7])})
+    finally:
+        env.close()
+    expected = replay(task, 5, commands, task_observation=False)
+    assert [float_bits(o) for o in observations] == [float_bits(e["flat"]) for e in expected]
+
+
+def test_seeds_continue_deterministically(env):
+    env.unwrapped.set_task(TASKS[0])
+    env.reset(seed=3)
+    second = env.reset()[1]["seed"]
+    third = env.reset()[1]["seed"]
+    env.reset(seed=3)
+    assert [env.reset()[1]["seed"], env.reset()[1]["seed"]] == [second, third]
+    assert len({3, second, third}) == 3
+
+
+def test_errors_say_what_was_wrong(env, suite):
+    with pytest.raises(ValueError, match="valid"):
+        env.unwrapped.set_task("IIWA/box/no_obstacle/fly")
+    with pytest.raises(ValueError, match="robot/object/obstacle/objective"):
+        env.unwrapped.set_task("IIWA/box")
+    env.unwrapped.set_task(TASKS[0])
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="8"):
+        env.unwrapped.step(np.zeros(7))
+    with pytest.raises(ValueError, match="non-finite"):
+        env.unwrapped.step(np.full(8, np.nan))
+    for _ in range(HORIZON):
+        env.step(np.zeros(8))
+    with pytest.raises(EpisodeOverError, match="reset"):
+        env.unwrapped.step(np.zeros(8))
+    with pytest.raises(ValueError, match="action_mode"):
+        CompoSuiteRosEnv(TASKS[0], "/gym", action_mode="torque")
+
+
+def test_suite_not_running_names_the_namespace(suite):
+    with pytest.raises(SuiteNotRunningError, match="/nobody_here"):
+        CompoSuiteRosEnv(TASKS[0], "/nobody_here", timeout=1.5)
+
+
+def test_close_leaves_no_thread_or_endpoint(suite):
+    before = threading.active_count()
+    probe = composuite_ros._link.Participant("probe")
+    try:
+        topic = "/gym/reference_action"
+        baseline = probe.node.count_publishers(topic)
+        env = CompoSuiteRosEnv(TASKS[0], "/gym")
+        assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline + 1, 5.0)
+        env.reset(seed=1)
+        env.step(np.zeros(8))
+        env.close()
+        assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline, 5.0), \
+            "the closed env's publisher is still in the graph"
+    finally:
+        probe.close()
+    assert threading.active_count() == before
+
+
+def test_lost_step_names_it(tmp_path):
+    # A sim killed mid-episode: the step in flight is lost; the error says which one.
+    launched = Launched(tmp_path, "/lost", TASKS[0], "--respawn-delay", "30", service_mapping="fastdds")
+    previous = os.environ.get("ROS_DOMAIN_ID")
+    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
+    try:
+        launched.wait_for_log("started")
+        env = CompoSuiteRosEnv(TASKS[0], "/lost")
+        try:
+            env.reset(seed=0)
+            env.timeout = 2.0
+            for _ in range(3):
+                env.step(np.zeros(8))
+            launched.kill_node("sim")
+            with pytest.raises(StepLostError, match="step 4 of episode"):
+                env.step(np.zeros(8))
+        finally:
+            env.close()
+    finally:
+        launched.stop()
+        os.environ["ROS_DOMAIN_ID"] = previous or "0"
+
+
+def test_vector_env_four_environments_two_tasks(tmp_path):
+    launched = Launched(tmp_path, "/vec", TASKS[0], "--envs", "4", "--horizon", "12",
+                        service_mapping="fastdds")
+    previous = os.environ.get("ROS_DOMAIN_ID")
+    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
+    tasks = [TASKS[0], TASKS[1]] * 2
+    try:
+        launched.wait_for_log("started")
+        envs = CompoSuiteRosVectorEnv([f"/vec/env_{i:02}" for i in range(4)], tasks)
+        try:
+            observations, infos = envs.reset(seed=20)
+            assert observations.shape == (4, 93) and list(infos["seed"]) == [20, 21, 22, 23]
+            rng = np.random.default_rng(3)
+            actions = rng.uniform(-1, 1, size=(14, 4, 8))
+            trace = [observations]
+            rewards, ends = [], []
+            for step_actions in actions:
+                observations, reward, terminated, truncated, infos = envs.step(step_actions)
+                trace.append(observations)
+                rewards.append(reward)
+                ends.append(terminated | truncated)
+        finally:
+            envs.close()
+    finally:
+        launched.stop()
+        os.environ["ROS_DOMAIN_ID"] = previous or "0"
+    # Each environment equals its own in-process Env: 12 steps, the horizon ends it (step 12),
+    # step 13 is the autoreset (new episode's first observation, reward 0), step 14 its step 1.
+    for i in range(4):
+        expected = env_replay_run({"task": tasks[i], "seed": 20 + i, "horizon": 12,
+                                   "commands": [{"reference": a.tolist()} for a in actions[:12, i]]})
+        assert [float_bits(trace[t][i]) for t in range(13)] == [float_bits(e["flat"]) for e in expected]
+        assert float_bits([r[i] for r in rewards[:12]]) == float_bits([e["reward"] for e in expected[1:]])
+        assert [bool(e[i]) for e in ends[:13]] == [False] * 11 + [True, False]
+        assert rewards[12][i] == 0.0
+    # The different tasks really are different environments (their task one-hots differ).
+    assert not np.array_equal(trace[0][0][45:61], trace[0][1][45:61])
+    assert np.array_equal(trace[0][0][45:61], trace[0][2][45:61])
