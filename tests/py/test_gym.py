@@ -5,7 +5,10 @@ the in-process `Env` (env_replay) in both action modes, the vector env over 4 en
 
 from __future__ import annotations
 
+import csv
 import os
+import subprocess
+import sys
 import threading
 
 import gymnasium
@@ -13,7 +16,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from node_suite import Launched, env_replay_run, float_bits
+from node_suite import REPO, Launched, env_replay_run, float_bits
 
 import composuite_ros
 from composuite_ros import CompoSuiteRosEnv, EpisodeOverError, StepLostError, SuiteNotRunningError
@@ -224,3 +227,32 @@ def test_vector_env_four_environments_two_tasks(tmp_path):
     # The different tasks really are different environments (their task one-hots differ).
     assert not np.array_equal(trace[0][0][45:61], trace[0][1][45:61])
     assert np.array_equal(trace[0][0][45:61], trace[0][2][45:61])
+
+
+def test_ppo_example_trains_through_the_vector_env(tmp_path):
+    # The numpy PPO of examples/ (the paper's learner) on two environments of the suite: it steps,
+    # updates and logs (no learning claim in so few steps).
+    launched = Launched(tmp_path, "/ppo", TASKS[0], "--envs", "2", "--horizon", "25",
+                        service_mapping="fastdds")
+    log, saved = tmp_path / "ppo.csv", tmp_path / "ppo.npz"
+    try:
+        launched.wait_for_log("started")
+        result = subprocess.run(
+            [sys.executable, str(REPO / "examples" / "ppo_train.py"), "--namespaces", "/ppo/env_00,/ppo/env_01",
+             "--epochs", "2", "--steps-per-epoch", "60", "--pi-iters", "3", "--v-iters", "3",
+             "--log", str(log), "--save", str(saved)],
+            env={**os.environ, "ROS_DOMAIN_ID": str(launched.domain)},
+            capture_output=True, text=True, timeout=180, check=False)
+    finally:
+        launched.stop()
+    assert result.returncode == 0, result.stderr[-3000:]
+    with open(log) as f:
+        rows = list(csv.DictReader(f))
+    assert [int(r["total_steps"]) for r in rows] == [60, 120]
+    # 2 envs × 60 steps: each env finishes 25-step episodes (the reset steps count as steps).
+    assert int(rows[0]["episodes"]) + int(rows[1]["episodes"]) >= 4
+    assert all(np.isfinite(float(r["ep_return_mean"])) for r in rows if r["ep_return_mean"])
+    # The suite reports success, so the success column is filled once episodes finish.
+    assert all(r["success_rate"] != "" for r in rows if int(r["episodes"]))
+    parameters = np.load(saved)
+    assert parameters["pi/W0"].shape == (93, 64) and parameters["log_std"].shape == (8,)

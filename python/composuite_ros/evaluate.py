@@ -1,0 +1,425 @@
+"""The CompoSuite paper's evaluation protocol over running environments of the suite.
+
+    composuite launch --envs 2 &
+    composuite-eval --experiment smallscale --element IIWA --num-train 16 --episodes 5 \\
+        --agent random --namespaces /env_00,/env_01 --out runs/eval_iiwa
+
+1. The train/test split comes from the suite's `sample_tasks` service, which draws it exactly as
+   the reference's `composuite.sample_tasks` (same experiment, num_train, element and shuffling
+   seed → the same lists as the paper's experiments).
+2. Every chosen task runs `--episodes` episodes (episode j of every task has seed `--seed` + j),
+   spread over the environments, which step concurrently.
+3. The paper's metrics: per task the mean return R̄ (sum of the step rewards of an episode,
+   averaged over its episodes) and the success rate S̄ (an episode succeeds if any step has
+   reward 1); then averaged over the train and over the test tasks, and per axis element.
+
+Agents: `random` (uniform in [-1, 1], seeded per episode), `zero`, or `module:Class` — a class
+built with no arguments, once per environment, with `act(observation) -> action` (the 93-value
+observation, the reference's 8 actions) and optionally `reset(task, seed)` called at each
+episode's start.
+
+Writes into `--out`: episodes.csv (one row per episode), summary.csv and summary.json (the
+metrics), and eval.png (with matplotlib installed: `pip install composuite_ros[plots]`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ._link import Channel, Participant
+from .env import EpisodeTracker, flat_observation, stamp_ns
+from .errors import SuiteNotRunningError
+from .tasks import AXES, Task
+
+EXPERIMENTS = ("default", "smallscale", "holdout")
+
+
+# ---- agents -------------------------------------------------------------------------------------
+
+class RandomAgent:
+    """Uniform actions in [-1, 1], drawn from a generator seeded by the episode's seed (so the
+    run does not depend on which environment an episode lands on)."""
+
+    def __init__(self):
+        self.rng = np.random.default_rng(0)
+
+    def reset(self, task: str, seed: int) -> None:
+        self.rng = np.random.default_rng(seed)
+
+    def act(self, observation):
+        return self.rng.uniform(-1.0, 1.0, size=8)
+
+
+class ZeroAgent:
+    """All-zero actions: the arm holds still, the gripper stays where it drifts."""
+
+    def act(self, observation):
+        return np.zeros(8)
+
+
+def agent_factory(spec: str):
+    """`random`, `zero` or `module:Class` → a callable making one agent."""
+    if spec == "random":
+        return RandomAgent
+    if spec == "zero":
+        return ZeroAgent
+    module_name, _, class_name = spec.partition(":")
+    if not module_name or not class_name:
+        raise ValueError(f"agent {spec!r} is not random, zero or module:Class")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as err:
+        raise ValueError(f"agent {spec!r}: cannot import {module_name} ({err}); is it on PYTHONPATH?") from err
+    cls = getattr(module, class_name, None)
+    if cls is None or not callable(getattr(cls, "act", None)):
+        raise ValueError(f"agent {spec!r}: {module_name} has no class {class_name} with an act(observation) method")
+    return cls
+
+
+# ---- results ------------------------------------------------------------------------------------
+
+@dataclass
+class EpisodeResult:
+    split: str
+    task: str
+    seed: int
+    namespace: str
+    episode: int
+    length: int
+    episode_return: float
+    success: bool
+    furthest_stage: str
+
+
+@dataclass
+class Metric:
+    split: str
+    axis: str  # "all" for the split's mean, else the axis of `element`
+    element: str
+    tasks: int
+    episodes: int
+    mean_return: float
+    success_rate: float
+
+
+def metrics(results: Sequence[EpisodeResult]) -> list[Metric]:
+    """R̄ and S̄ per split (mean over its tasks of each task's mean over episodes) and per axis
+    element (over the split's tasks containing it)."""
+    per_task: dict[tuple[str, str], list[EpisodeResult]] = {}
+    for r in results:
+        per_task.setdefault((r.split, r.task), []).append(r)
+    task_means = {key: (float(np.mean([e.episode_return for e in eps])),
+                        float(np.mean([e.success for e in eps])), len(eps))
+                  for key, eps in per_task.items()}
+    rows = []
+    for split in dict.fromkeys(r.split for r in results):
+        groups: dict[tuple[str, str], list[tuple[str, str]]] = {("all", ""): []}
+        for (s, task) in task_means:
+            if s != split:
+                continue
+            groups[("all", "")].append((s, task))
+            for axis, element in Task.parse(task).elements().items():
+                groups.setdefault((axis, element), []).append((s, task))
+        order = [("all", "")] + [(axis, e) for axis, elements in AXES.items() for e in elements
+                                 if (axis, e) in groups]
+        for axis, element in order:
+            keys = groups[(axis, element)]
+            rows.append(Metric(split, axis, element, len(keys), sum(task_means[k][2] for k in keys),
+                               float(np.mean([task_means[k][0] for k in keys])),
+                               float(np.mean([task_means[k][1] for k in keys]))))
+    return rows
+
+
+# ---- running ------------------------------------------------------------------------------------
+
+class Progress:
+    """One status line on stderr: rewritten in place on a terminal, every 10 % otherwise."""
+
+    def __init__(self, total: int, enabled: bool = True):
+        self.total, self.enabled = total, enabled
+        self.tty = sys.stderr.isatty()
+        self.started = time.monotonic()
+        self.last_tenth = -1
+
+    def update(self, done: int, steps: int, successes: int) -> None:
+        if not self.enabled:
+            return
+        elapsed = max(time.monotonic() - self.started, 1e-9)
+        line = (f"episodes {done}/{self.total}  {steps / elapsed:,.0f} steps/s  "
+                f"success {successes}/{done}" if done else f"episodes 0/{self.total}")
+        tenth = done * 10 // max(self.total, 1)
+        if self.tty:
+            print(f"\r{line}   ", end="" if done < self.total else "\n", file=sys.stderr, flush=True)
+        elif tenth != self.last_tenth:
+            self.last_tenth = tenth
+            print(line, file=sys.stderr, flush=True)
+
+
+@dataclass
+class _Job:
+    split: str
+    task: str
+    seed: int
+
+
+class _Worker:
+    """One environment running jobs one episode at a time."""
+
+    def __init__(self, channel: Channel, agent, use_task_id_obs: bool):
+        self.channel, self.agent, self.use_task_id_obs = channel, agent, use_task_id_obs
+        self.task: str | None = None
+        self.job: _Job | None = None
+        self.tracker: EpisodeTracker | None = None
+        self.length = 0
+
+    def start(self, job: _Job) -> None:
+        if job.task != self.task:
+            spec = self.channel.set_task(job.task)
+            self.task = "/".join((spec.robot, spec.object, spec.obstacle, spec.objective))
+        reply = self.channel.reset(job.seed)
+        self.job, self.length = job, 0
+        self.tracker = EpisodeTracker(stamp_ns(reply.observation))
+        if callable(getattr(self.agent, "reset", None)):
+            self.agent.reset(job.task, job.seed)
+        self._act(reply.observation)
+
+    def _act(self, observation) -> None:
+        action = np.asarray(self.agent.act(flat_observation(observation, self.use_task_id_obs)),
+                            dtype=np.float64).reshape(-1)
+        if action.shape != (8,) or not np.all(np.isfinite(action)):
+            raise ValueError(f"the agent returned {action.tolist()}; it must give 8 finite values")
+        self.channel.send_reference_action(action)
+
+    def advance(self) -> EpisodeResult | None:
+        """Take the arrived step; the finished episode's result, or None (next action sent)."""
+        messages = self.channel.take_step()
+        self.length += 1
+        info = self.tracker.step_info(messages)
+        if not self.tracker.done:
+            self._act(messages.observation)
+            return None
+        job, self.job = self.job, None
+        return EpisodeResult(job.split, job.task, job.seed, self.channel.namespace, self.channel.episode,
+                             self.length, self.tracker.episode_return, self.tracker.success,
+                             info["furthest_stage"])
+
+
+def run_episodes(jobs: Sequence[_Job], namespaces: Sequence[str], agent_spec: str = "random", *,
+                 use_task_id_obs: bool = True, domain_id: int | None = None, timeout: float = 10.0,
+                 progress: bool = True) -> list[EpisodeResult]:
+    """Run every job (task, seed) as one episode over the environments; results in job order."""
+    make_agent = agent_factory(agent_spec)
+    participant = Participant("composuite_eval", domain_id)
+    results: list[EpisodeResult] = []
+    try:
+        workers = [_Worker(Channel(participant, ns, timeout), make_agent(), use_task_id_obs)
+                   for ns in namespaces]
+        if not participant.spin_for(lambda: not any(w.channel.missing() for w in workers), timeout):
+            raise next(w.channel for w in workers if w.channel.missing()).not_running_error(
+                "waiting for the suite's topics and services")
+        queue = list(jobs)
+        queue.reverse()
+        bar = Progress(len(jobs), progress)
+        steps = successes = 0
+        last_progress = time.monotonic()
+        bar.update(0, 0, 0)
+        while queue or any(w.job for w in workers):
+            for worker in workers:
+                if worker.job is None and queue:
+                    worker.start(queue.pop())
+                    last_progress = time.monotonic()
+            participant.executor.spin_once(timeout_sec=0.01)
+            for worker in workers:
+                if worker.job is not None and worker.channel.step_arrived():
+                    steps += 1
+                    last_progress = time.monotonic()
+                    result = worker.advance()
+                    if result is not None:
+                        results.append(result)
+                        successes += result.success
+                        bar.update(len(results), steps, successes)
+            if time.monotonic() - last_progress > timeout:
+                stuck = next(w for w in workers if w.job is not None)
+                raise stuck.channel.step_lost_error()
+    finally:
+        participant.close()
+    order = {(j.split, j.task, j.seed): i for i, j in enumerate(jobs)}
+    return sorted(results, key=lambda r: order[(r.split, r.task, r.seed)])
+
+
+def evaluate(namespaces: Sequence[str], *, experiment: str = "default", num_train: int = 0,
+             element: str = "", split_seed: int = 0, splits: Sequence[str] = ("train", "test"),
+             max_tasks: int | None = None, episodes: int = 1, seed: int = 0, agent: str = "random",
+             use_task_id_obs: bool = True, domain_id: int | None = None, timeout: float = 10.0,
+             progress: bool = True) -> tuple[dict[str, list[str]], list[EpisodeResult], list[Metric]]:
+    """The protocol as a function: (the split's task lists, every episode, the metrics)."""
+    if experiment not in EXPERIMENTS:
+        raise ValueError(f"experiment {experiment!r} is not one of {', '.join(EXPERIMENTS)}")
+    if episodes < 1:
+        raise ValueError("episodes must be at least 1")
+    agent_factory(agent)  # a bad agent fails now, not after the split was drawn
+    unknown = set(splits) - {"train", "test"}
+    if unknown or not splits:
+        raise ValueError(f"splits {list(splits)}: choose from train, test")
+    lists = sample_split(namespaces[0], experiment, num_train, element, split_seed, domain_id, timeout)
+    chosen = {name: lists[name][:max_tasks] if max_tasks else lists[name] for name in splits}
+    jobs = [_Job(name, task, seed + j) for name in splits for task in chosen[name] for j in range(episodes)]
+    if not jobs:
+        raise ValueError(f"the {experiment} split with num_train {num_train} has no {' or '.join(splits)} tasks")
+    results = run_episodes(jobs, namespaces, agent, use_task_id_obs=use_task_id_obs, domain_id=domain_id,
+                           timeout=timeout, progress=progress)
+    return lists, results, metrics(results)
+
+
+def sample_split(namespace: str, experiment: str, num_train: int, element: str, seed: int,
+                 domain_id: int | None = None, timeout: float = 10.0) -> dict[str, list[str]]:
+    """The reference's train/test lists, from the suite's `sample_tasks` service."""
+    participant = Participant("composuite_eval_split", domain_id)
+    try:
+        channel = Channel(participant, namespace, timeout)
+        if not participant.spin_for(channel.sample_tasks_client.service_is_ready, timeout):
+            raise SuiteNotRunningError(
+                f"no sample_tasks service in namespace {channel.namespace} within {timeout:g} s: "
+                "is `composuite launch` running there, with the same ROS_DOMAIN_ID?")
+        train, test = channel.sample_tasks(experiment, num_train, element, seed)
+    finally:
+        participant.close()
+    as_names = lambda specs: ["/".join((t.robot, t.object, t.obstacle, t.objective)) for t in specs]  # noqa: E731
+    return {"train": as_names(train), "test": as_names(test)}
+
+
+# ---- output -------------------------------------------------------------------------------------
+
+def table(rows: Sequence[Metric]) -> str:
+    lines = [f"{'split':<6} {'axis':<10} {'element':<12} {'tasks':>5} {'episodes':>8} {'R̄':>8} {'S̄':>7}"]
+    for m in rows:
+        lines.append(f"{m.split:<6} {m.axis:<10} {m.element or '(all)':<12} {m.tasks:>5} {m.episodes:>8} "
+                     f"{m.mean_return:>8.3f} {m.success_rate:>7.1%}")
+    return "\n".join(lines)
+
+
+def write_outputs(out: Path, config: dict, lists: dict, results: Sequence[EpisodeResult],
+                  rows: Sequence[Metric]) -> list[Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    with open(out / "episodes.csv", "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["split", "task", "seed", "namespace", "episode", "length", "return",
+                         "success", "furthest_stage"])
+        for r in results:
+            writer.writerow([r.split, r.task, r.seed, r.namespace, r.episode, r.length,
+                             repr(r.episode_return), int(r.success), r.furthest_stage])
+    written.append(out / "episodes.csv")
+    with open(out / "summary.csv", "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["split", "axis", "element", "tasks", "episodes", "mean_return", "success_rate"])
+        for m in rows:
+            writer.writerow([m.split, m.axis, m.element, m.tasks, m.episodes, repr(m.mean_return),
+                             repr(m.success_rate)])
+    written.append(out / "summary.csv")
+    summary = {"config": config, "tasks": lists, "metrics": [asdict(m) for m in rows],
+               "episodes": [asdict(r) for r in results]}
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    written.append(out / "summary.json")
+    png = plot(out / "eval.png", rows)
+    if png:
+        written.append(png)
+    return written
+
+
+def plot(path: Path, rows: Sequence[Metric]) -> Path | None:
+    """Success rate and mean return per axis element, train and test side by side."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("composuite-eval: matplotlib not installed, no eval.png "
+              "(pip install 'composuite_ros[plots]')", file=sys.stderr)
+        return None
+    splits = list(dict.fromkeys(m.split for m in rows))
+    labels = list(dict.fromkeys((m.axis, m.element) for m in rows))
+    figure, axes = plt.subplots(2, 1, figsize=(max(6, 0.5 * len(labels) + 2), 6), sharex=True)
+    width = 0.8 / len(splits)
+    for k, split in enumerate(splits):
+        by_label = {(m.axis, m.element): m for m in rows if m.split == split}
+        xs = [i + k * width for i, label in enumerate(labels) if label in by_label]
+        present = [label for label in labels if label in by_label]
+        axes[0].bar(xs, [by_label[lb].success_rate for lb in present], width, label=split)
+        axes[1].bar(xs, [by_label[lb].mean_return for lb in present], width, label=split)
+    axes[0].set_ylabel("success rate S̄")
+    axes[0].set_ylim(0, 1)
+    axes[1].set_ylabel("mean return R̄")
+    axes[1].set_xticks([i + width * (len(splits) - 1) / 2 for i in range(len(labels))])
+    axes[1].set_xticklabels([e or "all" for _, e in labels], rotation=45, ha="right")
+    axes[0].legend()
+    figure.suptitle("CompoSuite-ROS evaluation")
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
+    return path
+
+
+# ---- command line -------------------------------------------------------------------------------
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="composuite-eval", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--experiment", default="default", choices=EXPERIMENTS,
+                   help="how the split is drawn: default (uniform over the 256 tasks), smallscale "
+                        "(the 64 tasks with --element), holdout (train without --element but one)")
+    p.add_argument("--num-train", type=int, default=0,
+                   help="training tasks: default 0..256, smallscale 0..64, holdout 1..193")
+    p.add_argument("--element", default="", help="axis element for smallscale/holdout, e.g. IIWA, plate")
+    p.add_argument("--split-seed", type=int, default=0, help="the reference's shuffling_seed")
+    p.add_argument("--splits", default="train,test", help="which lists to run: train, test or train,test")
+    p.add_argument("--max-tasks", type=int, default=None,
+                   help="run only the first N tasks of each list (quick checks; the metrics then "
+                        "cover those tasks only)")
+    p.add_argument("--episodes", type=int, default=1, help="episodes per task (episode j: seed --seed + j)")
+    p.add_argument("--seed", type=int, default=0, help="seed of each task's first episode")
+    p.add_argument("--agent", default="random", help="random, zero, or module:Class with act(observation)")
+    p.add_argument("--namespaces", default="/",
+                   help="comma-separated namespaces of the environments (composuite launch --envs N: "
+                        "/env_00,/env_01,...)")
+    p.add_argument("--no-task-id-obs", action="store_true", help="77-value observations (no task one-hots)")
+    p.add_argument("--timeout", type=float, default=10.0, help="seconds any wait may take")
+    p.add_argument("--out", type=Path, default=None, help="output folder (default runs/eval_<unix time>)")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    namespaces = [ns for ns in args.namespaces.split(",") if ns]
+    splits = [s for s in args.splits.split(",") if s]
+    out = args.out or Path("runs") / f"eval_{int(time.time())}"
+    try:
+        lists, results, rows = evaluate(
+            namespaces, experiment=args.experiment, num_train=args.num_train, element=args.element,
+            split_seed=args.split_seed, splits=splits, max_tasks=args.max_tasks, episodes=args.episodes,
+            seed=args.seed, agent=args.agent, use_task_id_obs=not args.no_task_id_obs,
+            timeout=args.timeout, progress=not args.quiet)
+    except (ValueError, TimeoutError, RuntimeError) as err:
+        print(f"composuite-eval: {err}", file=sys.stderr)
+        return 2
+    config = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()}
+    print(table(rows))
+    for path in write_outputs(out, config, lists, results, rows):
+        print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
