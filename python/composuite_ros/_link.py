@@ -1,7 +1,7 @@
 """The ROS side of the Gymnasium envs: one rclpy participant, and one `Channel` per environment
 of the suite (per namespace) with its topics, services and what arrived on them.
 
-Lessons this follows (rclpy 7.1.6 on Fast DDS, see the repository's docs/rclpy-agents.md):
+Lessons this follows (rclpy 7.1.6 on Fast DDS; the README's "Gymnasium" section has the figures):
 - a private `Context` and an own `SingleThreadedExecutor` polled with `spin_once`: nothing spins
   in the background, so `close()` leaves no thread, and no `spin_until_future_complete` (it slows
   down with every service call in that release);
@@ -22,15 +22,18 @@ import xml.etree.ElementTree as ElementTree
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
 import rclpy
 from composuite_msgs.msg import EpisodeStatus, Observation, StagedReward
 from composuite_msgs.srv import Reset, SampleTasks, SetTask
 from rclpy.context import Context
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 
+from ._cdr import FieldReader
 from .errors import StepLostError, SuiteNotRunningError
 
 # The suite's QoS (ROS defaults): state topics reliable/volatile/keep-last-10; latched topics
@@ -52,6 +55,10 @@ def attempt_budget(attempt: int) -> float:
     return ATTEMPT_BUDGETS_S[attempt] if attempt < len(ATTEMPT_BUDGETS_S) else LATER_ATTEMPT_S
 # How long the step-0 messages of a reset may take to arrive before the reset is asked again.
 STEP0_WAIT_S = 1.0
+# First contact (discovery of every endpoint) may take this many times the step timeout: RustDDS
+# and Fast DDS announce endpoints again only every few seconds when a first announcement is lost,
+# which happens on a loaded machine.
+DISCOVERY_TIMEOUT_FACTOR = 3.0
 # After this participant matched a writer that publishes nothing at a reset (`reward`), how long
 # to give that writer to match this reader before the first step's sample depends on it.
 # Discovery is symmetric (both sides exchange their endpoints at once), so this is generous.
@@ -96,10 +103,42 @@ class Participant:
 
 
 @dataclass
+class ObservationView:
+    """What the Gymnasium envs use of a composuite_msgs/Observation."""
+
+    episode: int
+    step: int
+    stamp_ns: int
+    includes_task: bool
+    flat: np.ndarray
+    # The task factor's one-hots in the flat vector's order: object, robot, obstacle, objective.
+    task_one_hots: np.ndarray
+
+    @classmethod
+    def of_message(cls, m: Observation) -> ObservationView:
+        t = m.task
+        return cls(m.episode, m.step, m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec,
+                   m.includes_task, np.asarray(m.flat, dtype=np.float64),
+                   np.concatenate([t.object_id, t.robot_id, t.obstacle_id, t.objective_id]))
+
+    @classmethod
+    def of_bytes(cls, data: bytes) -> ObservationView:
+        v = _OBSERVATION_FIELDS.read(data)
+        return cls(v["episode"], v["step"], v["header.stamp.sec"] * 1_000_000_000 + v["header.stamp.nanosec"],
+                   v["includes_task"], v["flat"],
+                   np.concatenate([v[f"task.{k}"] for k in ("object_id", "robot_id", "obstacle_id", "objective_id")]))
+
+
+_OBSERVATION_FIELDS = FieldReader(Observation, [
+    "header.stamp.sec", "header.stamp.nanosec", "episode", "step", "includes_task", "flat",
+    "task.object_id", "task.robot_id", "task.obstacle_id", "task.objective_id"])
+
+
+@dataclass
 class StepMessages:
     """What one lockstep step produced."""
 
-    observation: Observation
+    observation: ObservationView
     reward: StagedReward
     status: EpisodeStatus
 
@@ -113,27 +152,33 @@ class Channel:
         self.timeout = timeout
         node = participant.node
         prefix = "" if self.namespace == "/" else self.namespace
-        self.observations: dict[tuple[int, int], Observation] = {}
+        self.observations: dict[tuple[int, int], ObservationView] = {}
         self.rewards: dict[tuple[int, int], StagedReward] = {}
         self.statuses: dict[tuple[int, int], EpisodeStatus] = {}
         # The latched URDF of each robot seen, by its <robot name> (`iiwa`, `gen3`, ...).
         self.robot_descriptions: dict[str, str] = {}
-        self.joint_names: list[str] = []
+        # No QoS event handlers: each is one more entity in every wait of the lockstep loop, and
+        # rclpy's default ones only log incompatible QoS, which cannot happen with these profiles.
+        no_sub_events = SubscriptionEventCallbacks(use_default_callbacks=False)
+        no_pub_events = PublisherEventCallbacks(use_default_callbacks=False)
+        self._prefix = prefix
         self.subscriptions = {
+            # Raw: only the fields an agent uses are read (see _cdr.py).
             "observation": node.create_subscription(
-                Observation, f"{prefix}/observation", self._on_observation, STATE_QOS),
+                Observation, f"{prefix}/observation", self._on_observation, STATE_QOS,
+                event_callbacks=no_sub_events, raw=True),
             "reward": node.create_subscription(
-                StagedReward, f"{prefix}/reward", self._on_reward, STATE_QOS),
+                StagedReward, f"{prefix}/reward", self._on_reward, STATE_QOS,
+                event_callbacks=no_sub_events),
             "episode": node.create_subscription(
-                EpisodeStatus, f"{prefix}/episode", self._on_status, STATE_QOS),
+                EpisodeStatus, f"{prefix}/episode", self._on_status, STATE_QOS,
+                event_callbacks=no_sub_events),
         }
-        self.joint_states = node.create_subscription(
-            JointState, f"{prefix}/joint_states", self._on_joint_states, STATE_QOS)
-        self.description = node.create_subscription(
-            String, f"{prefix}/robot_description", self._on_description, LATCHED_QOS)
+        self.description = None  # robot_description, subscribed when first needed
         self.reference_action = node.create_publisher(
-            Float64MultiArray, f"{prefix}/reference_action", STATE_QOS)
-        self.joint_command = node.create_publisher(JointState, f"{prefix}/joint_command", STATE_QOS)
+            Float64MultiArray, f"{prefix}/reference_action", STATE_QOS, event_callbacks=no_pub_events)
+        self.joint_command = node.create_publisher(
+            JointState, f"{prefix}/joint_command", STATE_QOS, event_callbacks=no_pub_events)
         self.reset_client = node.create_client(Reset, f"{prefix}/reset")
         self.set_task_client = node.create_client(SetTask, f"{prefix}/set_task")
         self.sample_tasks_client = node.create_client(SampleTasks, f"{prefix}/sample_tasks")
@@ -144,7 +189,8 @@ class Channel:
 
     # ---- incoming ---------------------------------------------------------------------------
 
-    def _on_observation(self, message: Observation) -> None:
+    def _on_observation(self, data: bytes) -> None:
+        message = ObservationView.of_bytes(data)
         if message.episode >= self.episode:
             self.observations[(message.episode, message.step)] = message
 
@@ -155,9 +201,6 @@ class Channel:
     def _on_status(self, message: EpisodeStatus) -> None:
         if message.episode >= self.episode:
             self.statuses[(message.episode, message.step)] = message
-
-    def _on_joint_states(self, message: JointState) -> None:
-        self.joint_names = list(message.name)
 
     def _on_description(self, message: String) -> None:
         try:
@@ -192,11 +235,15 @@ class Channel:
         return (not self.missing()
                 and all(now - since >= WRITER_SETTLE_S for since in self._matched_since.values()))
 
-    def not_running_error(self, waited_for: str) -> SuiteNotRunningError:
+    @property
+    def discovery_timeout(self) -> float:
+        return DISCOVERY_TIMEOUT_FACTOR * self.timeout
+
+    def not_running_error(self, waited_for: str, seconds: float | None = None) -> SuiteNotRunningError:
         missing = self.missing()
         return SuiteNotRunningError(
             f"no CompoSuite-ROS environment answered in namespace {self.namespace} within "
-            f"{self.timeout:g} s ({waited_for}; still missing: {', '.join(missing) or 'nothing'}). "
+            f"{seconds or self.timeout:g} s ({waited_for}; still missing: {', '.join(missing) or 'nothing'}). "
             "Is `composuite launch` running there, in lockstep mode, with the same ROS_DOMAIN_ID?")
 
     # ---- services ---------------------------------------------------------------------------
@@ -204,8 +251,8 @@ class Channel:
     def call(self, client, request, what: str):
         """A service call with resends (see ATTEMPT_BUDGETS_S) until `timeout`."""
         deadline = time.monotonic() + self.timeout
-        if not self.participant.spin_for(client.service_is_ready, self.timeout):
-            raise self.not_running_error(f"waiting for {client.srv_name}")
+        if not self.participant.spin_for(client.service_is_ready, self.discovery_timeout):
+            raise self.not_running_error(f"waiting for {client.srv_name}", self.discovery_timeout)
         for attempt in itertools.count():
             future = client.call_async(request)
             budget = min(attempt_budget(attempt), max(deadline - time.monotonic(), 0.0))
@@ -238,29 +285,34 @@ class Channel:
     # ---- episodes ---------------------------------------------------------------------------
 
     def wait_ready(self) -> None:
-        if not self.participant.spin_for(lambda: not self.missing(), self.timeout):
-            raise self.not_running_error("waiting for the suite's topics and services")
+        if not self.participant.spin_for(lambda: not self.missing(), self.discovery_timeout):
+            raise self.not_running_error("waiting for the suite's topics and services", self.discovery_timeout)
 
     def start_reset(self, seed: int):
         """Send a reset request; returns the future."""
         return self.reset_client.call_async(Reset.Request(seed=seed, use_seed=True))
 
-    def reset(self, seed: int, attempts: int = 5) -> Reset.Response:
+    def reset(self, seed: int) -> Reset.Response:
         """Start an episode with `seed`; returns the reply (step-0 observation inside).
 
-        A reset is asked again (same seed: the same start) when its reply or its step-0 messages
-        do not arrive, which only happens while discovery is still settling."""
+        A reset is asked again (same seed: the same start) when its reply or its step-0
+        observation does not arrive, which only happens while discovery is still settling; for at
+        most the discovery timeout."""
         self.wait_ready()
-        for attempt in range(attempts):
+        deadline = time.monotonic() + self.discovery_timeout
+        for attempt in itertools.count():
             future = self.start_reset(seed)
             if not self.participant.spin_for(future.done, min(self.timeout, attempt_budget(attempt))):
                 self.reset_client.remove_pending_request(future)
-                continue
-            reply = self.finish_reset(future)
-            if self.participant.spin_for(self.step0_arrived, STEP0_WAIT_S):
-                self.participant.spin_for(self.settled, 2 * WRITER_SETTLE_S)
-                return reply
-        raise self.not_running_error(f"no reset reply with its step-0 messages after {attempts} attempts")
+            else:
+                reply = self.finish_reset(future)
+                if self.participant.spin_for(self.step0_arrived, STEP0_WAIT_S):
+                    self.participant.spin_for(self.settled, 2 * WRITER_SETTLE_S)
+                    return reply
+            if time.monotonic() >= deadline:
+                raise self.not_running_error(
+                    f"no reset reply with its step-0 observation after {attempt + 1} attempts",
+                    self.discovery_timeout)
 
     def finish_reset(self, future) -> Reset.Response:
         reply = future.result()
@@ -311,6 +363,9 @@ class Channel:
         """(name, lower, upper) of `robot`'s 7 arm joints then its left finger joint, from the
         latched `robot_description` URDF the sim publishes when the robot changes."""
         key = robot.lower()
+        if self.description is None:
+            self.description = self.participant.node.create_subscription(
+                String, f"{self._prefix}/robot_description", self._on_description, LATCHED_QOS)
         if not self.participant.spin_for(lambda: key in self.robot_descriptions, self.timeout):
             raise self.not_running_error(f"waiting for robot_description of {robot}")
         return urdf_joint_limits(self.robot_descriptions[key])

@@ -32,7 +32,7 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from ._link import ARM_JOINTS, Channel, Participant, normalize_namespace
+from ._link import ARM_JOINTS, Channel, ObservationView, Participant, normalize_namespace
 from .errors import EpisodeOverError
 from .tasks import Task
 
@@ -53,16 +53,19 @@ def reference_action_space() -> spaces.Box:
     return spaces.Box(-1.0, 1.0, shape=(ACTION_SIZE,), dtype=np.float32)
 
 
+def _view(message) -> ObservationView:
+    return message if isinstance(message, ObservationView) else ObservationView.of_message(message)
+
+
 def flat_observation(message, use_task_id_obs: bool) -> np.ndarray:
-    """The observation vector an agent gets, from composuite_msgs/Observation."""
-    flat = np.asarray(message.flat, dtype=np.float64)
-    if message.includes_task and not use_task_id_obs:
+    """The observation vector an agent gets, from a composuite_msgs/Observation (or its view)."""
+    view = _view(message)
+    flat = view.flat
+    if view.includes_task and not use_task_id_obs:
         return np.concatenate([flat[:TASK_ID_SLICE.start], flat[TASK_ID_SLICE.stop:]])
-    if not message.includes_task and use_task_id_obs:
-        task = message.task
-        one_hots = np.concatenate([task.object_id, task.robot_id, task.obstacle_id, task.objective_id])
-        return np.concatenate([flat[:TASK_ID_SLICE.start], one_hots, flat[TASK_ID_SLICE.start:]])
-    return flat
+    if not view.includes_task and use_task_id_obs:
+        return np.concatenate([flat[:TASK_ID_SLICE.start], view.task_one_hots, flat[TASK_ID_SLICE.start:]])
+    return flat.copy()
 
 
 def check_action_mode(action_mode: str) -> None:
@@ -121,8 +124,8 @@ class EpisodeTracker:
 
 
 def stamp_ns(message) -> int:
-    """A message's header stamp (the suite's sim time) in integer nanoseconds."""
-    return message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+    """An observation's header stamp (the suite's sim time) in integer nanoseconds."""
+    return _view(message).stamp_ns
 
 
 class CompoSuiteRosEnv(gymnasium.Env):
@@ -135,7 +138,8 @@ class CompoSuiteRosEnv(gymnasium.Env):
         action_mode: "reference" (8 normalised values, the benchmark's) or "absolute".
         use_task_id_obs: include the 16 task one-hots (93 values) or not (77).
         domain_id: ROS_DOMAIN_ID (default: the environment variable, else 0).
-        timeout: seconds any wait may take before it raises, naming what it waited for.
+        timeout: seconds any wait may take before it raises, naming what it waited for (the
+            first contact with the suite, discovery, may take 3 times as long).
     """
 
     metadata = {"render_modes": []}

@@ -225,9 +225,10 @@ def run_episodes(jobs: Sequence[_Job], namespaces: Sequence[str], agent_spec: st
     try:
         workers = [_Worker(Channel(participant, ns, timeout), make_agent(), use_task_id_obs)
                    for ns in namespaces]
-        if not participant.spin_for(lambda: not any(w.channel.missing() for w in workers), timeout):
+        seconds = workers[0].channel.discovery_timeout
+        if not participant.spin_for(lambda: not any(w.channel.missing() for w in workers), seconds):
             raise next(w.channel for w in workers if w.channel.missing()).not_running_error(
-                "waiting for the suite's topics and services")
+                "waiting for the suite's topics and services", seconds)
         queue = list(jobs)
         queue.reverse()
         bar = Progress(len(jobs), progress)
@@ -288,9 +289,9 @@ def sample_split(namespace: str, experiment: str, num_train: int, element: str, 
     participant = Participant("composuite_eval_split", domain_id)
     try:
         channel = Channel(participant, namespace, timeout)
-        if not participant.spin_for(channel.sample_tasks_client.service_is_ready, timeout):
+        if not participant.spin_for(channel.sample_tasks_client.service_is_ready, channel.discovery_timeout):
             raise SuiteNotRunningError(
-                f"no sample_tasks service in namespace {channel.namespace} within {timeout:g} s: "
+                f"no sample_tasks service in namespace {channel.namespace} within {channel.discovery_timeout:g} s: "
                 "is `composuite launch` running there, with the same ROS_DOMAIN_ID?")
         train, test = channel.sample_tasks(experiment, num_train, element, seed)
     finally:

@@ -163,6 +163,15 @@ class Launched:
             assert time.monotonic() < deadline, f"launch never said {text!r}:\n{self.text()[-4000:]}"
             time.sleep(0.05)
 
+    def wait_until_up(self, namespaces: list[str] | None = None, timeout: float = 20.0) -> None:
+        """Until every node of the environments in `namespaces` (default: this launch's own
+        namespace) said it is up: an agent created before that announces itself to nobody and
+        waits for the nodes' next periodic discovery announcement."""
+        for namespace in namespaces or [self.namespace]:
+            prefix = "" if namespace == "/" else namespace
+            for node in NODES:
+                self.wait_for_log(f"{prefix}/{node} up", timeout)
+
     def stop(self) -> None:
         self.process.send_signal(signal.SIGINT)
         try:

@@ -32,7 +32,7 @@ def suite(tmp_path_factory):
     previous = os.environ.get("ROS_DOMAIN_ID")
     os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
     try:
-        launched.wait_for_log("started")
+        launched.wait_until_up(NAMESPACES)
         yield launched
     finally:
         launched.stop()
@@ -111,7 +111,7 @@ def test_eval_with_a_user_agent_class(tmp_path):
                         service_mapping="fastdds")
     os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
     try:
-        launched.wait_for_log("started")
+        launched.wait_until_up()
         eval_agents.ClosingGripper.resets.clear()
         lists, results, rows = evaluate.evaluate(["/ua"], experiment="default", num_train=2, split_seed=1,
                                                  splits=["train"], episodes=2, seed=3,

@@ -35,7 +35,7 @@ def suite(tmp_path_factory):
     previous = os.environ.get("ROS_DOMAIN_ID")
     os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
     try:
-        launched.wait_for_log("started")
+        launched.wait_until_up()
         yield launched
     finally:
         launched.stop()
@@ -155,11 +155,14 @@ def test_close_leaves_no_thread_or_endpoint(suite):
         topic = "/gym/reference_action"
         baseline = probe.node.count_publishers(topic)
         env = CompoSuiteRosEnv(TASKS[0], "/gym")
-        assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline + 1, 5.0)
+        assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline + 1, 20.0)
         env.reset(seed=1)
         env.step(np.zeros(8))
         env.close()
-        assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline, 5.0), \
+        assert not env._participant.context.ok()
+        # Gone from the graph: at once when the participant's goodbye arrives, else after the
+        # DDS lease (Fast DDS: 20 s).
+        assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline, 30.0), \
             "the closed env's publisher is still in the graph"
     finally:
         probe.close()
@@ -172,7 +175,7 @@ def test_lost_step_names_it(tmp_path):
     previous = os.environ.get("ROS_DOMAIN_ID")
     os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
     try:
-        launched.wait_for_log("started")
+        launched.wait_until_up()
         env = CompoSuiteRosEnv(TASKS[0], "/lost")
         try:
             env.reset(seed=0)
@@ -196,7 +199,7 @@ def test_vector_env_four_environments_two_tasks(tmp_path):
     os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
     tasks = [TASKS[0], TASKS[1]] * 2
     try:
-        launched.wait_for_log("started")
+        launched.wait_until_up([f"/vec/env_{i:02}" for i in range(4)])
         envs = CompoSuiteRosVectorEnv([f"/vec/env_{i:02}" for i in range(4)], tasks)
         try:
             observations, infos = envs.reset(seed=20)
@@ -236,7 +239,7 @@ def test_ppo_example_trains_through_the_vector_env(tmp_path):
                         service_mapping="fastdds")
     log, saved = tmp_path / "ppo.csv", tmp_path / "ppo.npz"
     try:
-        launched.wait_for_log("started")
+        launched.wait_until_up(["/ppo/env_00", "/ppo/env_01"])
         result = subprocess.run(
             [sys.executable, str(REPO / "examples" / "ppo_train.py"), "--namespaces", "/ppo/env_00,/ppo/env_01",
              "--epochs", "2", "--steps-per-epoch", "60", "--pi-iters", "3", "--v-iters", "3",

@@ -1,0 +1,89 @@
+"""Gymnasium steps/s of the composuite_ros package through rclpy (ROS 2 Jazzy, Fast DDS): one
+`CompoSuiteRosEnv`, then `CompoSuiteRosVectorEnv` over 2 and 4 environments of
+`composuite launch --envs N` (aggregate steps/s: every environment steps once per vector step).
+
+Random reference actions, the suite's horizon of 500 (the env resets itself, the vector env
+autoresets); resets are inside the timing. Figures only, nothing is asserted. Run through
+`scripts/bench-gym`, which builds the release binaries and enters the loopback-only namespace.
+
+    python tests/py/bench_gym.py --steps 3000 --envs 1 2 4
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import node_suite
+from composuite_ros import CompoSuiteRosEnv
+from composuite_ros.vector import CompoSuiteRosVectorEnv
+
+TASK = "IIWA/box/no_obstacle/pick_place"
+
+
+def bench(n: int, steps: int, task: str) -> dict:
+    folder = Path(tempfile.mkdtemp(prefix="bench_gym_"))
+    extra = ["--envs", str(n)] if n > 1 else []
+    launched = node_suite.Launched(folder, "/bench", task, *extra, service_mapping="fastdds")
+    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
+    rng = np.random.default_rng(0)
+    latencies = []
+    try:
+        launched.wait_until_up([f"/bench/env_{i:02}" for i in range(n)] if n > 1 else None)
+        if n == 1:
+            env = CompoSuiteRosEnv(task, "/bench")
+            env.reset(seed=0)
+            started = time.perf_counter()
+            for _ in range(steps):
+                t = time.perf_counter()
+                _, _, terminated, truncated, _ = env.step(rng.uniform(-1, 1, 8))
+                if terminated or truncated:
+                    env.reset()
+                latencies.append(time.perf_counter() - t)
+        else:
+            env = CompoSuiteRosVectorEnv([f"/bench/env_{i:02}" for i in range(n)], task)
+            env.reset(seed=0)
+            started = time.perf_counter()
+            for _ in range(steps // n):
+                t = time.perf_counter()
+                env.step(rng.uniform(-1, 1, (n, 8)))
+                latencies.append(time.perf_counter() - t)
+        elapsed = time.perf_counter() - started
+        env.close()
+    finally:
+        launched.stop()
+    done = len(latencies) * n
+    return {"envs": n, "steps": done, "seconds": round(elapsed, 2),
+            "steps_per_s": round(done / elapsed, 1),
+            "step_latency_ms_median": round(statistics.median(latencies) * 1e3, 3),
+            "step_latency_ms_p99": round(sorted(latencies)[int(0.99 * (len(latencies) - 1))] * 1e3, 3)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--steps", type=int, default=3000, help="environment steps per configuration (summed over envs)")
+    parser.add_argument("--envs", type=int, nargs="+", default=[1, 2, 4], help="environment counts to measure")
+    parser.add_argument("--task", default=TASK)
+    parser.add_argument("--json", action="store_true", help="print JSON lines instead of a table")
+    args = parser.parse_args()
+    node_suite.require_isolation()
+    if not args.json:
+        print(f"{'envs':>4} {'steps':>7} {'steps/s':>9} {'step ms (median)':>17} {'p99':>8}")
+    for n in args.envs:
+        r = bench(n, args.steps, args.task)
+        if args.json:
+            print(json.dumps(r), flush=True)
+        else:
+            print(f"{r['envs']:>4} {r['steps']:>7} {r['steps_per_s']:>9,.0f} "
+                  f"{r['step_latency_ms_median']:>17.3f} {r['step_latency_ms_p99']:>8.3f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
