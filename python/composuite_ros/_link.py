@@ -35,6 +35,7 @@ from std_msgs.msg import Float64MultiArray, String
 
 from ._cdr import FieldReader
 from .errors import StepLostError, SuiteNotRunningError
+from .tasks import Task
 
 # The suite's QoS (ROS defaults): state topics reliable/volatile/keep-last-10; latched topics
 # (robot_description) transient local, keep last 1.
@@ -262,25 +263,25 @@ class Channel:
             if time.monotonic() >= deadline:
                 raise self.not_running_error(f"no reply to {what}")
 
-    def set_task(self, task: str):
-        robot, obj, obstacle, objective = task.split("/")
+    def set_task(self, task: Task) -> Task:
+        """Set `task`; the task as the suite spells it (its wire names)."""
         reply = self.call(self.set_task_client,
-                          SetTask.Request(robot=robot, object=obj, obstacle=obstacle,
-                                          objective=objective),
+                          SetTask.Request(robot=task.robot, object=task.object, obstacle=task.obstacle,
+                                          objective=task.objective),
                           f"set_task {task}")
         if not reply.success:
             raise ValueError(f"set_task {task} refused in {self.namespace}: {reply.message}")
-        return reply.task
+        return Task.of_spec(reply.task)
 
     def sample_tasks(self, experiment: str, num_train: int, element: str, seed: int,
-                     no_shuffle: bool = False):
+                     no_shuffle: bool = False) -> tuple[list[Task], list[Task]]:
         reply = self.call(self.sample_tasks_client,
                           SampleTasks.Request(experiment=experiment, num_train=num_train,
                                               element=element, seed=seed, no_shuffle=no_shuffle),
                           "sample_tasks")
         if not reply.success:
             raise ValueError(f"sample_tasks refused: {reply.message}")
-        return reply.train, reply.test
+        return [Task.of_spec(t) for t in reply.train], [Task.of_spec(t) for t in reply.test]
 
     # ---- episodes ---------------------------------------------------------------------------
 
@@ -306,8 +307,7 @@ class Channel:
                 self.reset_client.remove_pending_request(future)
             else:
                 reply = self.finish_reset(future)
-                if self.participant.spin_for(self.step0_arrived, STEP0_WAIT_S):
-                    self.participant.spin_for(self.settled, 2 * WRITER_SETTLE_S)
+                if self.await_step0():
                     return reply
             if time.monotonic() >= deadline:
                 raise self.not_running_error(
@@ -324,6 +324,14 @@ class Channel:
             for key in [k for k in store if k[0] != reply.episode]:
                 del store[key]
         return reply
+
+    def await_step0(self) -> bool:
+        """After a reset reply: whether its step-0 observation came (so the sim's writer knows
+        this reader); if so, also give the writers with nothing at step 0 time to match."""
+        if not self.participant.spin_for(self.step0_arrived, STEP0_WAIT_S):
+            return False
+        self.participant.spin_for(self.settled, 2 * WRITER_SETTLE_S)
+        return True
 
     def step0_arrived(self) -> bool:
         # The sim publishes the step-0 observation at a reset (`reward` and `episode` start at

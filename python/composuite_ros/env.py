@@ -213,8 +213,7 @@ class CompoSuiteRosEnv(gymnasium.Env):
         ValueError lists the valid choices when the suite does not know a name."""
         parsed = Task.parse(task)
         self._channel.wait_ready()
-        spec = self._channel.set_task(str(parsed))
-        self.task = Task(spec.robot, spec.object, spec.obstacle, spec.objective)
+        self.task = self._channel.set_task(parsed)
         self._tracker = None
         if self.action_mode == "absolute":
             self._use_robot_limits(self.task.robot)

@@ -28,7 +28,6 @@ import argparse
 import csv
 import importlib
 import json
-import math
 import sys
 import time
 from collections.abc import Sequence
@@ -185,8 +184,7 @@ class _Worker:
 
     def start(self, job: _Job) -> None:
         if job.task != self.task:
-            spec = self.channel.set_task(job.task)
-            self.task = "/".join((spec.robot, spec.object, spec.obstacle, spec.objective))
+            self.task = str(self.channel.set_task(Task.parse(job.task)))
         reply = self.channel.reset(job.seed)
         self.job, self.length = job, 0
         self.tracker = EpisodeTracker(stamp_ns(reply.observation))
@@ -296,8 +294,7 @@ def sample_split(namespace: str, experiment: str, num_train: int, element: str, 
         train, test = channel.sample_tasks(experiment, num_train, element, seed)
     finally:
         participant.close()
-    as_names = lambda specs: ["/".join((t.robot, t.object, t.obstacle, t.objective)) for t in specs]  # noqa: E731
-    return {"train": as_names(train), "test": as_names(test)}
+    return {"train": [str(t) for t in train], "test": [str(t) for t in test]}
 
 
 # ---- output -------------------------------------------------------------------------------------

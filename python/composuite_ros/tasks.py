@@ -37,6 +37,11 @@ class Task(NamedTuple):
                 f"e.g. {ROBOTS[0]}/{OBJECTS[0]}/{OBSTACLES[0]}/{OBJECTIVES[0]}")
         return cls(*parts)
 
+    @classmethod
+    def of_spec(cls, spec) -> Task:
+        """A composuite_msgs/TaskSpec (what the suite's services answer) as a Task."""
+        return cls(spec.robot, spec.object, spec.obstacle, spec.objective)
+
     def elements(self) -> dict[str, str]:
         """The axis element of each axis: {"robot": "IIWA", ...}."""
         return dict(zip(AXES, self))

@@ -28,7 +28,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ._link import STEP0_WAIT_S, Channel, Participant, attempt_budget
+from ._link import Channel, Participant, attempt_budget
 from .env import (EpisodeSeeds, EpisodeTracker, flat_observation, observation_space,
                   reference_action_space, stamp_ns)
 from .errors import EpisodeOverError
@@ -97,8 +97,7 @@ class CompoSuiteRosVectorEnv(VectorEnv):
 
     def set_task(self, index: int, task: str | Task) -> Task:
         """Give environment `index` a task (its episode ends; the next reset starts the new one)."""
-        spec = self.channels[index].set_task(str(Task.parse(task)))
-        self.tasks[index] = Task(spec.robot, spec.object, spec.obstacle, spec.objective)
+        self.tasks[index] = self.channels[index].set_task(Task.parse(task))
         self._trackers[index] = None
         return self.tasks[index]
 
@@ -114,7 +113,7 @@ class CompoSuiteRosVectorEnv(VectorEnv):
             channel = self.channels[i]
             if future.done():
                 replies[i] = channel.finish_reset(future)
-                if not self._participant.spin_for(channel.step0_arrived, STEP0_WAIT_S):
+                if not channel.await_step0():
                     # The sim's writer does not know this reader yet: the careful path.
                     replies[i] = channel.reset(episode_seeds[i])
             else:

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import tempfile
 import time
@@ -31,12 +30,9 @@ TASK = "IIWA/box/no_obstacle/pick_place"
 def bench(n: int, steps: int, task: str) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="bench_gym_"))
     extra = ["--envs", str(n)] if n > 1 else []
-    launched = node_suite.Launched(folder, "/bench", task, *extra, service_mapping="fastdds")
-    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
     rng = np.random.default_rng(0)
     latencies = []
-    try:
-        launched.wait_until_up([f"/bench/env_{i:02}" for i in range(n)] if n > 1 else None)
+    with node_suite.launch_running(folder, "/bench", task, *extra, service_mapping="fastdds") as launched:
         if n == 1:
             env = CompoSuiteRosEnv(task, "/bench")
             env.reset(seed=0)
@@ -48,7 +44,7 @@ def bench(n: int, steps: int, task: str) -> dict:
                     env.reset()
                 latencies.append(time.perf_counter() - t)
         else:
-            env = CompoSuiteRosVectorEnv([f"/bench/env_{i:02}" for i in range(n)], task)
+            env = CompoSuiteRosVectorEnv(launched.namespaces, task)
             env.reset(seed=0)
             started = time.perf_counter()
             for _ in range(steps // n):
@@ -57,8 +53,6 @@ def bench(n: int, steps: int, task: str) -> dict:
                 latencies.append(time.perf_counter() - t)
         elapsed = time.perf_counter() - started
         env.close()
-    finally:
-        launched.stop()
     done = len(latencies) * n
     return {"envs": n, "steps": done, "seconds": round(elapsed, 2),
             "steps_per_s": round(done / elapsed, 1),

@@ -138,6 +138,10 @@ class Launched:
     def __init__(self, log_dir: Path, namespace: str, task: str, *extra: str,
                  service_mapping: str = "cyclone"):
         self.namespace, self.domain = namespace, random_domain()
+        envs = int(extra[extra.index("--envs") + 1]) if "--envs" in extra else 1
+        base = "" if namespace == "/" else namespace
+        # Each environment's namespace, named as `composuite launch` names them.
+        self.namespaces = [namespace] if envs == 1 else [f"{base}/env_{i:02}" for i in range(envs)]
         self.log = log_dir / "launch.stderr"
         env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
         env["ROS_DOMAIN_ID"] = str(self.domain)
@@ -163,11 +167,11 @@ class Launched:
             assert time.monotonic() < deadline, f"launch never said {text!r}:\n{self.text()[-4000:]}"
             time.sleep(0.05)
 
-    def wait_until_up(self, namespaces: list[str] | None = None, timeout: float = 20.0) -> None:
-        """Until every node of the environments in `namespaces` (default: this launch's own
-        namespace) said it is up: an agent created before that announces itself to nobody and
-        waits for the nodes' next periodic discovery announcement."""
-        for namespace in namespaces or [self.namespace]:
+    def wait_until_up(self, timeout: float = 20.0) -> None:
+        """Until every node of every environment said it is up: an agent created before that
+        announces itself to nobody and waits for the nodes' next periodic discovery
+        announcement."""
+        for namespace in self.namespaces:
             prefix = "" if namespace == "/" else namespace
             for node in NODES:
                 self.wait_for_log(f"{prefix}/{node} up", timeout)
@@ -181,6 +185,24 @@ class Launched:
             code = self.process.wait()
         assert code == 0, f"launch exited {code}:\n{self.text()[-4000:]}"
         assert node_processes(f"__ns:={self.namespace}") == [], "nodes left running"
+
+
+@contextlib.contextmanager
+def launch_running(log_dir: Path, namespace: str, task: str, *extra: str, service_mapping: str = "cyclone"):
+    """A `Launched` whose nodes are all up, with ROS_DOMAIN_ID set to its domain for the `with`
+    body (rclpy agents and subprocesses read it); stopped, and the variable restored, after."""
+    suite = Launched(log_dir, namespace, task, *extra, service_mapping=service_mapping)
+    previous = os.environ.get("ROS_DOMAIN_ID")
+    os.environ["ROS_DOMAIN_ID"] = str(suite.domain)
+    try:
+        suite.wait_until_up()
+        yield suite
+    finally:
+        suite.stop()
+        if previous is None:
+            os.environ.pop("ROS_DOMAIN_ID", None)
+        else:
+            os.environ["ROS_DOMAIN_ID"] = previous
 
 
 class Suite:

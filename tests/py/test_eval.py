@@ -7,14 +7,13 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from node_suite import Launched, env_replay_run, node_dir
+from node_suite import env_replay_run, launch_running, node_dir
 
 import eval_agents
 from composuite_ros import evaluate
@@ -26,17 +25,12 @@ NAMESPACES = ["/ev/env_00", "/ev/env_01"]
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory):
     folder = tmp_path_factory.mktemp("eval")
-    launched = Launched(folder, "/ev", "IIWA/box/no_obstacle/pick_place", "--envs", "2",
-                        "--horizon", str(HORIZON), "--record", str(folder / "bag"), service_mapping="fastdds")
-    launched.bag = folder / "bag"
-    previous = os.environ.get("ROS_DOMAIN_ID")
-    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
-    try:
-        launched.wait_until_up(NAMESPACES)
+    with launch_running(folder, "/ev", "IIWA/box/no_obstacle/pick_place", "--envs", "2",
+                        "--horizon", str(HORIZON), "--record", str(folder / "bag"),
+                        service_mapping="fastdds") as launched:
+        assert launched.namespaces == NAMESPACES
+        launched.bag = folder / "bag"
         yield launched
-    finally:
-        launched.stop()
-        os.environ["ROS_DOMAIN_ID"] = previous or "0"
 
 
 def composuite_eval(*args: str, check: bool = True) -> subprocess.CompletedProcess:
@@ -107,17 +101,12 @@ def test_eval_metrics_equal_the_bag_and_the_in_process_env(suite, tmp_path):
 
 
 def test_eval_with_a_user_agent_class(tmp_path):
-    launched = Launched(tmp_path, "/ua", "IIWA/box/no_obstacle/pick_place", "--horizon", "5",
-                        service_mapping="fastdds")
-    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
-    try:
-        launched.wait_until_up()
+    with launch_running(tmp_path, "/ua", "IIWA/box/no_obstacle/pick_place", "--horizon", "5",
+                        service_mapping="fastdds"):
         eval_agents.ClosingGripper.resets.clear()
         lists, results, rows = evaluate.evaluate(["/ua"], experiment="default", num_train=2, split_seed=1,
                                                  splits=["train"], episodes=2, seed=3,
                                                  agent="eval_agents:ClosingGripper", progress=False)
-    finally:
-        launched.stop()
     assert [r.task for r in results] == [t for t in lists["train"] for _ in range(2)]
     assert eval_agents.ClosingGripper.resets == [(t, s) for t in lists["train"] for s in (3, 4)]
     assert all(r.length == 5 for r in results)

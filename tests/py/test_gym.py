@@ -6,7 +6,6 @@ the in-process `Env` (env_replay) in both action modes, the vector env over 4 en
 from __future__ import annotations
 
 import csv
-import os
 import subprocess
 import sys
 import threading
@@ -16,7 +15,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from node_suite import REPO, Launched, env_replay_run, float_bits
+from node_suite import REPO, env_replay_run, float_bits, launch_running
 
 import composuite_ros
 from composuite_ros import CompoSuiteRosEnv, EpisodeOverError, StepLostError, SuiteNotRunningError
@@ -30,19 +29,9 @@ TASKS = ["IIWA/box/no_obstacle/pick_place", "Jaco/dumbbell/object_wall/push",
 
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory):
-    launched = Launched(tmp_path_factory.mktemp("gym"), "/gym", TASKS[0], "--horizon", str(HORIZON),
-                        service_mapping="fastdds")
-    previous = os.environ.get("ROS_DOMAIN_ID")
-    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
-    try:
-        launched.wait_until_up()
+    with launch_running(tmp_path_factory.mktemp("gym"), "/gym", TASKS[0], "--horizon", str(HORIZON),
+                        service_mapping="fastdds") as launched:
         yield launched
-    finally:
-        launched.stop()
-        if previous is None:
-            os.environ.pop("ROS_DOMAIN_ID", None)
-        else:
-            os.environ["ROS_DOMAIN_ID"] = previous
 
 
 @pytest.fixture(scope="module")
@@ -171,11 +160,8 @@ def test_close_leaves_no_thread_or_endpoint(suite):
 
 def test_lost_step_names_it(tmp_path):
     # A sim killed mid-episode: the step in flight is lost; the error says which one.
-    launched = Launched(tmp_path, "/lost", TASKS[0], "--respawn-delay", "30", service_mapping="fastdds")
-    previous = os.environ.get("ROS_DOMAIN_ID")
-    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
-    try:
-        launched.wait_until_up()
+    with launch_running(tmp_path, "/lost", TASKS[0], "--respawn-delay", "30",
+                        service_mapping="fastdds") as launched:
         env = CompoSuiteRosEnv(TASKS[0], "/lost")
         try:
             env.reset(seed=0)
@@ -187,20 +173,13 @@ def test_lost_step_names_it(tmp_path):
                 env.step(np.zeros(8))
         finally:
             env.close()
-    finally:
-        launched.stop()
-        os.environ["ROS_DOMAIN_ID"] = previous or "0"
 
 
 def test_vector_env_four_environments_two_tasks(tmp_path):
-    launched = Launched(tmp_path, "/vec", TASKS[0], "--envs", "4", "--horizon", "12",
-                        service_mapping="fastdds")
-    previous = os.environ.get("ROS_DOMAIN_ID")
-    os.environ["ROS_DOMAIN_ID"] = str(launched.domain)
     tasks = [TASKS[0], TASKS[1]] * 2
-    try:
-        launched.wait_until_up([f"/vec/env_{i:02}" for i in range(4)])
-        envs = CompoSuiteRosVectorEnv([f"/vec/env_{i:02}" for i in range(4)], tasks)
+    with launch_running(tmp_path, "/vec", TASKS[0], "--envs", "4", "--horizon", "12",
+                        service_mapping="fastdds") as launched:
+        envs = CompoSuiteRosVectorEnv(launched.namespaces, tasks)
         try:
             observations, infos = envs.reset(seed=20)
             assert observations.shape == (4, 93) and list(infos["seed"]) == [20, 21, 22, 23]
@@ -215,9 +194,6 @@ def test_vector_env_four_environments_two_tasks(tmp_path):
                 ends.append(terminated | truncated)
         finally:
             envs.close()
-    finally:
-        launched.stop()
-        os.environ["ROS_DOMAIN_ID"] = previous or "0"
     # Each environment equals its own in-process Env: 12 steps, the horizon ends it (step 12),
     # step 13 is the autoreset (new episode's first observation, reward 0), step 14 its step 1.
     for i in range(4):
@@ -235,19 +211,14 @@ def test_vector_env_four_environments_two_tasks(tmp_path):
 def test_ppo_example_trains_through_the_vector_env(tmp_path):
     # The numpy PPO of examples/ (the paper's learner) on two environments of the suite: it steps,
     # updates and logs (no learning claim in so few steps).
-    launched = Launched(tmp_path, "/ppo", TASKS[0], "--envs", "2", "--horizon", "25",
-                        service_mapping="fastdds")
     log, saved = tmp_path / "ppo.csv", tmp_path / "ppo.npz"
-    try:
-        launched.wait_until_up(["/ppo/env_00", "/ppo/env_01"])
+    with launch_running(tmp_path, "/ppo", TASKS[0], "--envs", "2", "--horizon", "25",
+                        service_mapping="fastdds") as launched:
         result = subprocess.run(
-            [sys.executable, str(REPO / "examples" / "ppo_train.py"), "--namespaces", "/ppo/env_00,/ppo/env_01",
+            [sys.executable, str(REPO / "examples" / "ppo_train.py"), "--namespaces", ",".join(launched.namespaces),
              "--epochs", "2", "--steps-per-epoch", "60", "--pi-iters", "3", "--v-iters", "3",
              "--log", str(log), "--save", str(saved)],
-            env={**os.environ, "ROS_DOMAIN_ID": str(launched.domain)},
             capture_output=True, text=True, timeout=180, check=False)
-    finally:
-        launched.stop()
     assert result.returncode == 0, result.stderr[-3000:]
     with open(log) as f:
         rows = list(csv.DictReader(f))
