@@ -1,7 +1,8 @@
 //! The static scene, as plain data: bins, obstacles, trash can, shelf, goal marker, robot base,
 //! the object's start region, and the objects' own primitives.
 //!
-//! Every number comes from `shared/reference/composuite-facts.md` §2 and §3 and is written
+//! Every number comes from the reference's arena, obstacle and object code (CompoSuite
+//! `1fa36f6`; which files: `docs/reference-sources.md`) and is written
 //! once, in a table with one row per axis element: [`objective_arena`] (bins, fixture, goal),
 //! [`obstacle_geometry`] ("no obstacle" is a row with no parts) and [`object_geometry`]. The
 //! functions below compose those rows into placed primitives. Units are metres and radians;

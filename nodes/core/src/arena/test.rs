@@ -1,5 +1,5 @@
-//! The arena tables against `shared/reference/composuite-facts.md` §2 and §3: every world-frame
-//! number the facts sheet states is pinned here.
+//! The arena tables against the reference's scene (its arena, obstacle and object code and its
+//! compiled model; `docs/reference-sources.md`): every world-frame number is pinned here.
 
 use std::collections::BTreeSet;
 

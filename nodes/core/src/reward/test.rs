@@ -1,4 +1,5 @@
-//! The staged rewards against `shared/reference/composuite-facts.md` §6: every threshold from
+//! The staged rewards against the reference's subtask code (`composuite/tasks/*_subtask.py`,
+//! see `docs/reference-sources.md`): every threshold from
 //! both sides, every gate, the maxima, and random snapshots for the invariants.
 
 use nalgebra::{Point3, Vector3};
