@@ -22,7 +22,8 @@ pub struct RelativePose {
     pub orientation: [f64; 4],
     /// Position in the eef frame (m): R_eefᵀ (p − p_eef).
     pub position_in_eef: [f64; 3],
-    /// Orientation in the eef frame: q_eef⁻¹ ⊗ q (x, y, z, w).
+    /// Orientation in the eef frame: ±(q_eef⁻¹ ⊗ q), the sign chosen as the reference chooses
+    /// it ([`reference_sign`]) (x, y, z, w).
     pub orientation_in_eef: [f64; 4],
 }
 
@@ -104,6 +105,37 @@ pub fn xyzw(q: &UnitQuaternion<f64>) -> [f64; 4] {
     [q.i, q.j, q.k, q.w]
 }
 
+/// The reference's sign for a quaternion it derives from a rotation matrix: robosuite's
+/// `mat2pose` → `mat2quat` takes the eigenvector of the largest eigenvalue of a 4×4 matrix built
+/// from the rotation, whose sign is arbitrary, and negates it when w < 0. So its eef-relative
+/// quaternions have w ≥ 0, while q_eef⁻¹ ⊗ q may come out either way (at the start pose, hand
+/// pointing down, w ≈ 0 and the product's sign follows tiny tilts).
+///
+/// At a half turn (w = 0 to float32 precision) the reference keeps whatever sign its float32
+/// LAPACK eigen-solver produced, which is rounding noise: the same matrix gives opposite signs
+/// under numba's eigh (scipy's OpenBLAS, robosuite's default) and numpy's (measured on the iiwa's
+/// start pose, `docs/differences-from-reference.md`). Here a half turn gets the sign whose first
+/// non-zero vector component is positive, which is what the reference gives on every start pose
+/// recorded in `tests/reference/data/step0.json.gz`.
+pub fn reference_sign(q: UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    let flip = if q.w.abs() < HALF_TURN_W {
+        [q.i, q.j, q.k]
+            .into_iter()
+            .find(|c| c.abs() >= HALF_TURN_W)
+            .is_some_and(|c| c < 0.0)
+    } else {
+        q.w < 0.0
+    };
+    if flip {
+        UnitQuaternion::new_unchecked(-q.into_inner())
+    } else {
+        q
+    }
+}
+
+/// Below this |w| a quaternion is a half turn as far as float32 can tell (its resolution at 1).
+const HALF_TURN_W: f64 = 1e-7;
+
 impl RelativePose {
     /// `pose` in the world and seen from `eef`.
     pub fn new(
@@ -116,7 +148,7 @@ impl RelativePose {
             position: position.coords.into(),
             orientation: xyzw(&orientation),
             position_in_eef: in_eef.into(),
-            orientation_in_eef: xyzw(&(eef.rotation.inverse() * orientation)),
+            orientation_in_eef: xyzw(&reference_sign(eef.rotation.inverse() * orientation)),
         }
     }
 
@@ -179,5 +211,40 @@ impl Observation {
         out.extend(r.gripper_qvel);
         debug_assert_eq!(out.len(), size);
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hand pointing down, tilted a little either way, sees an upright object rotated by
+    /// about half a turn: w is tiny and its sign follows the tilt. The reference's value always
+    /// has w ≥ 0 and is the same rotation.
+    #[test]
+    fn eef_relative_quaternions_take_the_references_sign() {
+        for tilt in [-0.01, -1e-4, 1e-4, 0.01, 0.0] {
+            let hand_down =
+                UnitQuaternion::from_euler_angles(std::f64::consts::PI + tilt, 0.0, 0.3);
+            let eef = Isometry3::from_parts(Vector3::new(0.0, 0.0, 1.0).into(), hand_down);
+            let object = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.7);
+            let pose = RelativePose::new(Point3::new(0.1, 0.0, 0.8), object, &eef);
+            let [x, y, z, w] = pose.orientation_in_eef;
+            if tilt == 0.0 {
+                // A half turn: the sign whose first non-zero component is positive.
+                assert!(w.abs() < 1e-12 && x > 0.0, "half turn: {:?}", [x, y, z, w]);
+            } else {
+                assert!(w > 0.0, "tilt {tilt}: w = {w}");
+            }
+            let product = hand_down.inverse() * object;
+            assert!(
+                (product.angle_to(&UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                    w, x, y, z
+                ))))
+                .abs()
+                    < 1e-12,
+                "tilt {tilt}: a different rotation"
+            );
+        }
     }
 }

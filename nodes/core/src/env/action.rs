@@ -23,7 +23,8 @@ pub enum Action {
         /// `(opening in m, max effort in N, 0 = default)`, or `None` to keep the last command.
         gripper: Option<(f64, f64)>,
     },
-    /// The reference's 8 numbers in [−1, 1]: joint goal = measured q + 0.05·a[0..7], and the
+    /// The reference's 8 numbers in [−1, 1]: joint goal = measured q + 0.05·a[0..7] (not
+    /// clamped to the joint limits: as in the reference, the limit stops the joint), and the
     /// sign of `a[7]` moves the gripper (+ close, − open), with the reference's soft controller.
     Reference([f64; 8]),
 }

@@ -393,15 +393,12 @@ impl SimWorld {
         };
     }
 
-    /// Set absolute arm joint targets (rad), used from the next physics step on. The caller
-    /// validates them (see `control::limits`); here they are only clamped to the joint limits.
+    /// Set arm joint targets (rad), used from the next physics step on, as given: absolute
+    /// commands are validated and clamped by the caller (`control::limits`), while the
+    /// reference's goals (q + 0.05·a) may lie past a limit, as in the reference, where the
+    /// joint's limit constraint (here rapier's) stops the joint and the servo pushes into it.
     pub fn set_arm_targets(&mut self, targets: &[f64; ARM_DOF]) {
-        for (j, t) in targets.iter().enumerate() {
-            self.arm_targets[j] = match self.model.joints[j].limits {
-                Some((lo, hi)) => t.clamp(lo, hi),
-                None => *t,
-            };
-        }
+        self.arm_targets = *targets;
     }
 
     /// Current arm targets (rad).
@@ -736,30 +733,52 @@ impl SimWorld {
         }
     }
 
-    /// Whether any collider of the given finger (pads included) touches the object.
+    /// Whether any collider of the given finger (only its pad with `pad_only`) touches the
+    /// object: the shapes overlap or touch at their current poses (distance ≤ 0), which is what
+    /// MuJoCo's contact list holds (geom margins are 0 in the reference). Rapier's own contact
+    /// pairs would not do: they include speculative contacts up to the prediction distance
+    /// apart (2 mm), and a pair that moves less than its recycling distance keeps last
+    /// update's points.
     pub fn finger_touches_object(&self, side: Side, pad_only: bool) -> bool {
+        let Some(object) = self.object_collider() else {
+            return false;
+        };
+        let colliders = &self.physics.colliders;
+        let object = &colliders[object];
         self.arm.finger_colliders.iter().any(|(handle, tag)| {
             let wanted = if pad_only {
                 *tag == ColliderTag::Pad(side)
             } else {
                 tag.is_finger(side)
             };
-            wanted
-                && self
-                    .physics
-                    .narrow_phase
-                    .contact_pairs_with(*handle)
-                    .any(|pair| {
-                        let other = if pair.collider1 == *handle {
-                            pair.collider2
-                        } else {
-                            pair.collider1
-                        };
-                        pair.has_any_active_contact()
-                            && ColliderTag::decode(self.physics.colliders[other].user_data)
-                                == Some(ColliderTag::Object)
-                    })
+            wanted && {
+                let finger = &colliders[*handle];
+                rapier3d::parry::query::intersection_test(
+                    &self.collider_pose(finger),
+                    finger.shape(),
+                    &self.collider_pose(object),
+                    object.shape(),
+                )
+                .expect("parry tests boxes, capsules, cylinders and compounds of them")
+                .intersecting
+            }
         })
+    }
+
+    /// The object's (one, compound) collider.
+    fn object_collider(&self) -> Option<ColliderHandle> {
+        let body = self.physics.bodies.get(self.object?)?;
+        body.colliders().first().copied()
+    }
+
+    /// A collider's world pose from its body's current pose (not the pose cached at the last
+    /// collision detection).
+    fn collider_pose(&self, collider: &Collider) -> Pose {
+        let local = collider.position_wrt_parent().copied().unwrap_or_default();
+        match collider.parent() {
+            Some(body) => *self.physics.bodies[body].position() * local,
+            None => *collider.position(),
+        }
     }
 }
 
