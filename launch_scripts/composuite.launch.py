@@ -26,11 +26,13 @@ ARGUMENTS = [
     ("horizon", "500", "control steps per episode"),
     ("service_mapping", "fastdds", "service wire format: fastdds (rmw_fastrtps) or cyclone (rmw_cyclonedds)"),
     ("auto_reset", "false", "start the next episode as soon as one ends"),
+    ("reward_shaping", "true", "staged rewards (true) or sparse ones: 1 on success, else 0"),
+    ("reward_scale", "1.0", "every reward is multiplied by this"),
 ]
 NODE_PARAMETERS = {
     "task_manager": ["task", "seed", "horizon", "auto_reset", "service_mapping"],
     "sim": ["mode", "realtime_factor", "service_mapping"],
-    "reward": ["service_mapping"],
+    "reward": ["reward_shaping", "reward_scale", "service_mapping"],
 }
 
 

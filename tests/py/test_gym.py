@@ -81,6 +81,34 @@ def test_episode_bit_identical_to_in_process_env(env, task):
     assert got[-1][3] and len(got) == HORIZON + 1
 
 
+@pytest.mark.parametrize("options,config", [
+    (("--reward-scale", "2.5"), {"reward_scale": 2.5}),
+    (("--sparse-rewards",), {"reward_shaping": False}),
+])
+def test_reward_shaping_and_scale_options_equal_the_in_process_env(tmp_path, options, config):
+    """The reference's make(reward_shaping=..., reward_scale=...) as launch options (reward node
+    parameters): the rewards equal the in-process Env's with the same settings, bit for bit,
+    while the stages are still reported."""
+    task = TASKS[0]
+    with launch_running(tmp_path, "/shaping", task, "--horizon", "15", *options, service_mapping="fastdds"):
+        with CompoSuiteRosEnv(task=task, namespace="/shaping") as environment:
+            actions = np.random.default_rng(3).uniform(-1, 1, size=(15, 8))
+            environment.reset(seed=2)
+            rewards, stages = [], []
+            for action in actions:
+                _, reward, _, _, info = environment.step(action)
+                rewards.append(reward)
+                stages.append(max(info["stages"].values()))
+    expected = env_replay_run({"task": task, "seed": 2, "horizon": 15, **config,
+                               "commands": [{"reference": [float(a) for a in action]} for action in actions]})
+    assert float_bits(rewards) == float_bits([step["reward"] for step in expected[1:]])
+    assert max(stages) > 0, "the reach stage is non-zero somewhere"
+    if config.get("reward_shaping") is False:
+        assert rewards == [0.0] * len(rewards), "no success in 15 random steps: sparse rewards are 0"
+    else:
+        assert rewards == [2.5 * s for s in stages]
+
+
 def test_absolute_mode_and_77_observations(suite):
     task = TASKS[3]
     env = CompoSuiteRosEnv(task, "/gym", action_mode="absolute", use_task_id_obs=False)

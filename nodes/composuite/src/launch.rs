@@ -54,6 +54,13 @@ pub struct LaunchArgs {
     /// Control steps per episode [default: 500].
     #[arg(long)]
     pub(crate) horizon: Option<u32>,
+    /// Sparse rewards, as the reference's `make(reward_shaping=False)`: 1 on success, else 0
+    /// (the stages are still published) [default: shaped].
+    #[arg(long)]
+    sparse_rewards: bool,
+    /// Multiply every reward by this, as the reference's `reward_scale` [default: 1].
+    #[arg(long, value_name = "SCALE")]
+    reward_scale: Option<f64>,
     /// Service wire format: fastdds (rmw_fastrtps, Jazzy's default) or cyclone (rmw_cyclonedds)
     /// [default: fastdds].
     #[arg(long)]
@@ -153,6 +160,13 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
     if args.horizon == Some(0) {
         return Err("--horizon must be at least 1".into());
     }
+    if let Some(scale) = args.reward_scale
+        && !scale.is_finite()
+    {
+        return Err(format!(
+            "--reward-scale {scale} is invalid; a finite number"
+        ));
+    }
     if let Some(d) = args.duration
         && !(d.is_finite() && d > 0.0)
     {
@@ -225,7 +239,14 @@ fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usi
                 param("auto_reset", "true".into());
             }
         }
-        NodeKind::Reward => {}
+        NodeKind::Reward => {
+            if args.sparse_rewards {
+                param("reward_shaping", "false".into());
+            }
+            if let Some(scale) = args.reward_scale {
+                param("reward_scale", format!("{scale:?}"));
+            }
+        }
         NodeKind::Recorder => {
             if let Some(dir) = &args.record {
                 param("output", dir.display().to_string());
@@ -392,6 +413,8 @@ impl LaunchArgs {
             envs: 1,
             seed: None,
             horizon: None,
+            sparse_rewards: false,
+            reward_scale: None,
             service_mapping: None,
             auto_reset: false,
             params_file: None,

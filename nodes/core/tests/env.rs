@@ -379,3 +379,32 @@ fn all_256_tasks_run_random_episodes() {
     });
     let _ = Robot::all();
 }
+
+/// The reference's `reward_shaping=False` and `reward_scale`: sparse rewards are 0 until
+/// success, a scale multiplies every reward, and the stages are reported either way. The
+/// scripted expert reaches success, so both sides of the sparse rule are exercised.
+#[test]
+fn sparse_and_scaled_rewards_follow_the_staged_ones() {
+    let task: TaskSpec = "IIWA/box/no_obstacle/pick_place".parse().unwrap();
+    let run = |config: EnvConfig| {
+        let mut env = Env::new(task, config);
+        env.reset(0).unwrap();
+        let mut expert = composuite_core::expert::Expert::new(task);
+        let mut steps = Vec::new();
+        while env.ended().is_none() {
+            let step = env.step(&expert.act(&env)).unwrap();
+            steps.push((step.reward, step.info.staged.total, step.info.success));
+        }
+        steps
+    };
+    let shaped = run(EnvConfig::default());
+    let sparse = run(EnvConfig::default().reward_shaping(false));
+    let scaled = run(EnvConfig::default().reward_scale(2.5));
+    assert!(shaped.iter().any(|s| s.2), "the expert succeeds");
+    assert!(shaped.iter().any(|s| !s.2 && s.0 > 0.0));
+    for ((a, b), c) in shaped.iter().zip(&sparse).zip(&scaled) {
+        assert_eq!(b.0, if a.2 { 1.0 } else { 0.0 }, "sparse");
+        assert_eq!(b.1, a.1, "stages unchanged");
+        assert_eq!(c.0, 2.5 * a.0, "scaled");
+    }
+}

@@ -6,6 +6,7 @@
 //! ```
 //!
 //! `episode.json` is `{"task": "R/O/B/J", "seed": S, "horizon": H?, "task_observation": B?,
+//! "reward_shaping": B?, "reward_scale": X?,
 //! "commands": [{"joints": [7 rad], "gripper": [opening m, effort N] | null, "finger": q?}, ...]}`
 //! — the same commands an agent sends as `joint_command` (+ `gripper_command` before it; or
 //! `finger`, the `l_finger_joint` target (m) put into `joint_command` itself), or
@@ -57,6 +58,12 @@ fn run() -> Result<(), String> {
     }
     if let Some(t) = spec["task_observation"].as_bool() {
         config = config.task_observation(t);
+    }
+    if let Some(on) = spec["reward_shaping"].as_bool() {
+        config = config.reward_shaping(on);
+    }
+    if let Some(scale) = spec["reward_scale"].as_f64() {
+        config = config.reward_scale(scale);
     }
     let mut env = Env::new(task, config);
     let first = env.reset(seed).map_err(|e| e.to_string())?;

@@ -3,22 +3,43 @@
 //! success flag on `success`. The objective and object come from the latched `scene`.
 
 use composuite_core::TaskSpec;
-use composuite_core::reward::staged_reward;
+use composuite_core::reward::{RewardConfig, staged_reward};
 use composuite_msgs::msg;
 use composuite_msgs::std_msgs::msg::Bool;
 use futures::{FutureExt, StreamExt};
+use ros2_client::ParameterValue;
 
 use crate::convert;
 use crate::names;
 use crate::node::RosNode;
-use crate::params::ParamSpec;
+use crate::params::{ParamSpec, any_value};
 use crate::qos;
 
 /// World states kept while their episode's scene is on its way.
 const MAX_EARLY: usize = 64;
 
-/// The reward node has no parameters of its own.
-pub const PARAMS: &[ParamSpec] = &[];
+fn check_scale(v: &ParameterValue) -> Result<(), String> {
+    match v {
+        ParameterValue::Double(d) if d.is_finite() => Ok(()),
+        _ => Err("the reward scale is a finite number (1.0: rewards as they are)".into()),
+    }
+}
+
+/// The reward node's parameters: the reference's `make()` reward options.
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "reward_shaping",
+        default: || ParameterValue::Boolean(true),
+        description: "staged rewards (true) or sparse ones: 1 on success, else 0",
+        check: any_value,
+    },
+    ParamSpec {
+        name: "reward_scale",
+        default: || ParameterValue::Double(1.0),
+        description: "every reward (StagedReward.total) is multiplied by this",
+        check: check_scale,
+    },
+];
 
 /// Run the reward node until SIGINT/SIGTERM.
 pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<(), String> {
@@ -36,6 +57,12 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         .subscription::<msg::WorldState>(names::WORLD_STATE, qos::state())
         .map_err(e)?;
     let log = node.log.clone();
+    let param_changes = node.param_changes.clone();
+    // Read by `score` and changed by parameter events: a Cell, as both live on this thread.
+    let config = std::cell::Cell::new(RewardConfig {
+        shaping: node.param_bool("reward_shaping"),
+        scale: node.param_f64("reward_scale"),
+    });
     log.info(format!("{} up", node.fully_qualified_name()));
     // The task and episode the world states belong to.
     let mut current: Option<(TaskSpec, u32)> = None;
@@ -44,7 +71,8 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let mut early: Vec<msg::WorldState> = Vec::new();
     let score = |task: TaskSpec, w: &msg::WorldState| {
         let r = staged_reward(task.objective, task.object, &convert::snapshot(w));
-        let message = convert::staged_reward(&r, w.header.stamp.clone(), w.episode, w.step);
+        let mut message = convert::staged_reward(&r, w.header.stamp.clone(), w.episode, w.step);
+        message.total = config.get().reward(&r);
         // Publishing only fails when DDS is shutting down.
         let _ = reward_pub.publish(message);
         let _ = success_pub.publish(Bool { data: r.success });
@@ -57,6 +85,17 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                 signal = signals.recv().fuse() => {
                     log.info(format!("signal {} received, shutting down", signal.unwrap_or(0)));
                     return Ok(());
+                }
+                change = param_changes.recv().fuse() => {
+                    let Ok(change) = change else { continue };
+                    let mut c = config.get();
+                    match (change.name.as_str(), &change.value) {
+                        ("reward_shaping", ParameterValue::Boolean(on)) => c.shaping = *on,
+                        ("reward_scale", ParameterValue::Double(scale)) => c.scale = *scale,
+                        _ => {}
+                    }
+                    config.set(c);
+                    log.info(format!("rewards from now on: shaping {}, scale {}", c.shaping, c.scale));
                 }
                 scene = scenes.select_next_some() => match scene {
                     Ok((scene, _)) => {

@@ -30,7 +30,9 @@ use crate::axes::Obstacle;
 use crate::control::{ArmCommandError, Clamped, GripperCommandError};
 use crate::obs::{GoalFactor, Observation, RelativePose, RobotFactor, TaskFactor, xyzw};
 use crate::physics::{ARM_DOF, FINGER_OPEN, PhysicsParams, ServoMode, SimWorld};
-use crate::reward::{StagedReward, Termination, WorldSnapshot, staged_reward, termination};
+use crate::reward::{
+    RewardConfig, StagedReward, Termination, WorldSnapshot, staged_reward, termination,
+};
 
 /// Settings of an environment; start from `EnvConfig::default()` and change fields with the
 /// builder methods.
@@ -42,6 +44,8 @@ pub struct EnvConfig {
     pub task_observation: bool,
     /// Physics settings (2 ms steps, 25 per control step by default).
     pub physics: PhysicsParams,
+    /// Shaped or sparse rewards, and their scale (shaped, × 1 by default, as the reference).
+    pub reward: RewardConfig,
 }
 
 impl Default for EnvConfig {
@@ -50,6 +54,7 @@ impl Default for EnvConfig {
             horizon: 500,
             task_observation: true,
             physics: PhysicsParams::default(),
+            reward: RewardConfig::default(),
         }
     }
 }
@@ -66,6 +71,20 @@ impl EnvConfig {
     #[must_use]
     pub fn task_observation(mut self, on: bool) -> Self {
         self.task_observation = on;
+        self
+    }
+
+    /// Shaped rewards (`true`, the default) or sparse ones: 1 on success, else 0.
+    #[must_use]
+    pub fn reward_shaping(mut self, on: bool) -> Self {
+        self.reward.shaping = on;
+        self
+    }
+
+    /// Multiply every reward by `scale` (the reference's `reward_scale`; 1 by default).
+    #[must_use]
+    pub fn reward_scale(mut self, scale: f64) -> Self {
+        self.reward.scale = scale;
         self
     }
 
@@ -146,7 +165,8 @@ impl std::error::Error for EnvError {}
 pub struct Step {
     /// The observation after the step.
     pub observation: Observation,
-    /// The reward (1 on success, else the best stage value).
+    /// The reward: 1 on success, else the best stage value (0 with sparse rewards), times the
+    /// reward scale ([`EnvConfig::reward`]).
     pub reward: f64,
     /// The objective's own termination ended the episode (Push: object lifted).
     pub terminated: bool,
@@ -265,11 +285,12 @@ impl Env {
                 truncated,
             };
         }
-        self.episode_return += staged.total;
+        let reward = self.config.reward.reward(&staged);
+        self.episode_return += reward;
         self.success_seen |= staged.success;
         Ok(Step {
             observation: self.observation(),
-            reward: staged.total,
+            reward,
             terminated,
             truncated,
             info: StepInfo {

@@ -111,6 +111,40 @@ impl StagedReward {
     }
 }
 
+/// How the staged reward becomes the number an agent gets: the reference's `make()` options
+/// `reward_shaping` and `reward_scale`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RewardConfig {
+    /// Shaped (the default): 1 on success, else the best stage. Sparse (`false`): 1 on success,
+    /// else 0.
+    pub shaping: bool,
+    /// Multiplies the reward (the reference's default is 1).
+    pub scale: f64,
+}
+
+impl Default for RewardConfig {
+    fn default() -> Self {
+        RewardConfig {
+            shaping: true,
+            scale: 1.0,
+        }
+    }
+}
+
+impl RewardConfig {
+    /// The reward an agent gets for `staged`, as the reference's `reward()` computes it.
+    pub fn reward(&self, staged: &StagedReward) -> f64 {
+        let reward = if staged.success {
+            1.0
+        } else if self.shaping {
+            staged.total
+        } else {
+            0.0
+        };
+        reward * self.scale
+    }
+}
+
 /// Why an episode ended before its horizon.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Termination {
