@@ -1,0 +1,262 @@
+//! The reference benchmark's own recorded episodes (`tests/reference/data/`, written by
+//! `tests/reference/generate.py` from CompoSuite 1fa36f6 on robosuite 1.4.0 / MuJoCo 2.3.7; the
+//! formats are described in `tests/reference/README.md`): loading them and replaying their
+//! actions in the port. Shared by the fidelity tests and the `reference_divergence` example.
+#![allow(dead_code)]
+
+use std::fs::File;
+use std::io::BufReader;
+use std::path::PathBuf;
+
+use composuite_core::TaskSpec;
+use composuite_core::env::{Action, Env, EnvConfig};
+use composuite_core::reward::WorldSnapshot;
+use nalgebra::{Point3, Vector3};
+use serde_json::Value;
+
+/// Where the data lives: `tests/reference/data`, or `$COMPOSUITE_REFERENCE_DATA` (to check a
+/// freshly generated set before it replaces the committed one).
+pub fn data_dir() -> PathBuf {
+    match std::env::var_os("COMPOSUITE_REFERENCE_DATA") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/reference/data"),
+    }
+}
+
+fn load(file: &str) -> Value {
+    let path = data_dir().join(file);
+    let reader = File::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let text = flate2::read::GzDecoder::new(BufReader::new(reader));
+    serde_json::from_reader(text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .expect("a list of numbers")
+        .iter()
+        .map(|x| x.as_f64().expect("a number"))
+        .collect()
+}
+
+fn rows(v: &Value) -> Vec<Vec<f64>> {
+    v.as_array().expect("a list").iter().map(floats).collect()
+}
+
+fn point(v: &[f64]) -> Point3<f64> {
+    Point3::new(v[0], v[1], v[2])
+}
+
+fn task(record: &Value) -> TaskSpec {
+    let name = record["name"].as_str().expect("task name");
+    name.parse()
+        .unwrap_or_else(|e| panic!("task {name} in the reference data: {e}"))
+}
+
+/// Observation index ranges the comparisons name.
+pub mod layout {
+    use std::ops::Range;
+    /// The eef-relative quaternions the reference derives from rotation matrices (object,
+    /// obstacle, goal): xyzw, w last.
+    pub const RELATIVE_QUATERNIONS: [Range<usize>; 3] = [10..14, 24..28, 38..42];
+    /// Object body position.
+    pub const OBJECT_POSITION: Range<usize> = 0..3;
+    /// Arm joint cosines and sines.
+    pub const JOINT_COS: Range<usize> = 61..68;
+    pub const JOINT_SIN: Range<usize> = 68..75;
+    /// Grip site position.
+    pub const EEF_POSITION: Range<usize> = 82..85;
+    /// Hand orientation, xyzw.
+    pub const EEF_QUATERNION: Range<usize> = 85..89;
+    /// Field name of an observation index, for messages.
+    pub fn field(index: usize) -> &'static str {
+        const FIELDS: [(usize, &str); 23] = [
+            (0, "obj_pos"),
+            (3, "obj_quat"),
+            (7, "obj_to_eef_pos"),
+            (10, "obj_to_eef_quat"),
+            (14, "obstacle_pos"),
+            (17, "obstacle_quat"),
+            (21, "obstacle_to_eef_pos"),
+            (24, "obstacle_to_eef_quat"),
+            (28, "goal_pos"),
+            (31, "goal_quat"),
+            (35, "goal_to_eef_pos"),
+            (38, "goal_to_eef_quat"),
+            (42, "obj_to_goal"),
+            (45, "object_id"),
+            (49, "robot_id"),
+            (53, "obstacle_id"),
+            (57, "subtask_id"),
+            (61, "joint_pos_cos"),
+            (68, "joint_pos_sin"),
+            (75, "joint_vel"),
+            (82, "eef_pos"),
+            (85, "eef_quat"),
+            (89, "gripper_qpos/qvel"),
+        ];
+        FIELDS
+            .iter()
+            .rev()
+            .find(|(start, _)| index >= *start)
+            .map(|(_, name)| *name)
+            .unwrap_or("?")
+    }
+}
+
+/// One task and seed of `step0.json.gz`: the observation `reset()` returned.
+pub struct Step0 {
+    pub task: TaskSpec,
+    pub seed: u64,
+    pub observation: Vec<f64>,
+}
+
+/// Every task × seed of `step0.json.gz` (256 × 5).
+pub fn step0() -> Vec<Step0> {
+    let data = load("step0.json.gz");
+    let mut cases = Vec::new();
+    for record in data["tasks"].as_array().expect("tasks") {
+        let task = task(record);
+        for seed in record["seeds"].as_array().expect("seeds") {
+            cases.push(Step0 {
+                task,
+                seed: seed["seed"].as_u64().expect("seed"),
+                observation: floats(&seed["obs"]),
+            });
+        }
+    }
+    cases
+}
+
+/// One recorded episode of `trajectories.json.gz`: record 0 is the state after `reset`,
+/// record t + 1 the state after action t.
+pub struct Trajectory {
+    pub task: TaskSpec,
+    pub seed: u64,
+    pub actions: Vec<[f64; 8]>,
+    pub stage_names: Vec<String>,
+    pub observations: Vec<Vec<f64>>,
+    /// `None` for record 0.
+    pub rewards: Vec<Option<f64>>,
+    pub staged: Vec<Vec<f64>>,
+    pub success: Vec<bool>,
+    pub grasp: Vec<bool>,
+    pub object_position: Vec<Vec<f64>>,
+    pub grip_site_position: Vec<Vec<f64>>,
+    pub hand_z: Vec<Vec<f64>>,
+}
+
+impl Trajectory {
+    /// The world the reference's reward saw at record `r`, as the port's reward reads it.
+    /// Trashcan's drop stage reads the last gripper action: record 0 used an all-zero action.
+    pub fn snapshot(&self, r: usize) -> WorldSnapshot {
+        let hand_z = &self.hand_z[r];
+        WorldSnapshot {
+            object_position: point(&self.object_position[r]),
+            grip_site_position: point(&self.grip_site_position[r]),
+            hand_z_axis: Vector3::new(hand_z[0], hand_z[1], hand_z[2]),
+            grasping: self.grasp[r],
+            last_gripper_action: if r == 0 { 0.0 } else { self.actions[r - 1][7] },
+        }
+    }
+
+    /// The port's observations for the same seed and actions, record for record (stops where
+    /// the port ends the episode).
+    pub fn replay(&self, config: EnvConfig) -> Vec<Vec<f64>> {
+        let mut env = Env::new(self.task, config);
+        let mut out = vec![env.reset(self.seed).expect("reset").flat()];
+        for action in self.actions.iter().take(self.observations.len() - 1) {
+            match env.step(&Action::Reference(*action)) {
+                Ok(step) => out.push(step.observation.flat()),
+                Err(_) => break,
+            }
+        }
+        out
+    }
+}
+
+/// The 32 recorded episodes (16 tasks covering every element 4 times × seeds 0 and 1).
+pub fn trajectories() -> Vec<Trajectory> {
+    let data = load("trajectories.json.gz");
+    let actions: Vec<[f64; 8]> = rows(&data["meta"]["actions"])
+        .into_iter()
+        .map(|a| a.try_into().expect("8 action values"))
+        .collect();
+    data["episodes"]
+        .as_array()
+        .expect("episodes")
+        .iter()
+        .map(|e| Trajectory {
+            task: task(e),
+            seed: e["seed"].as_u64().expect("seed"),
+            actions: actions.clone(),
+            stage_names: e["stage_names"]
+                .as_array()
+                .expect("stage names")
+                .iter()
+                .map(|s| s.as_str().expect("a name").to_string())
+                .collect(),
+            observations: rows(&e["obs"]),
+            rewards: e["reward"]
+                .as_array()
+                .expect("rewards")
+                .iter()
+                .map(Value::as_f64)
+                .collect(),
+            staged: rows(&e["staged"]),
+            success: bools(&e["success"]),
+            grasp: bools(&e["grasp"]),
+            object_position: rows(&e["object_pos"]),
+            grip_site_position: rows(&e["grip_site_pos"]),
+            hand_z: rows(&e["hand_z"]),
+        })
+        .collect()
+}
+
+fn bools(v: &Value) -> Vec<bool> {
+    v.as_array()
+        .expect("a list of booleans")
+        .iter()
+        .map(|b| b.as_bool().expect("a boolean"))
+        .collect()
+}
+
+/// Joint angles from an observation's cosines and sines.
+pub fn joint_angles(observation: &[f64]) -> Vec<f64> {
+    layout::JOINT_COS
+        .zip(layout::JOINT_SIN)
+        .map(|(c, s)| observation[s].atan2(observation[c]))
+        .collect()
+}
+
+/// How far apart two runs are at one record: mean |Δ| over the joints (rad, wrapped), and the
+/// distance between the grip sites and between the objects (m).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Divergence {
+    pub joints: f64,
+    pub eef: f64,
+    pub object: f64,
+}
+
+pub fn divergence(ours: &[f64], reference: &[f64]) -> Divergence {
+    let (a, b) = (joint_angles(ours), joint_angles(reference));
+    let joints = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| {
+            let d = (x - y).rem_euclid(std::f64::consts::TAU);
+            d.min(std::f64::consts::TAU - d)
+        })
+        .sum::<f64>()
+        / a.len() as f64;
+    let distance = |range: std::ops::Range<usize>| {
+        range
+            .map(|i| (ours[i] - reference[i]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    Divergence {
+        joints,
+        eef: distance(layout::EEF_POSITION),
+        object: distance(layout::OBJECT_POSITION),
+    }
+}
