@@ -538,9 +538,25 @@ def run_trajectories(args, composuite):
 # ------------------------------------------------------------------------------------------------
 def run_random(args, composuite):
     tasks = filter_tasks(design_tasks(), args.tasks)
-    results = []
+    # Finished tasks are appended to a partial file, so --resume can continue an interrupted run
+    # (same mechanism as step0).
+    partial_path = os.path.join(args.out, ".random.partial.jsonl")
+    finished = {}
+    if args.resume and os.path.exists(partial_path):
+        with open(partial_path) as f:
+            for line in f:
+                rec = json.loads(line)
+                if len(rec["episodes"]) == args.episodes:
+                    finished[rec["name"]] = rec
+        log(f"random: resuming, {len(finished)} tasks already recorded in {partial_path}")
+    elif os.path.exists(partial_path):
+        os.remove(partial_path)
+    partial = open(partial_path, "a")
     t_start = time.time()
+    n_new = 0
     for k, (robot, obj, obstacle, objective) in enumerate(tasks):
+        if port_name(robot, obj, obstacle, objective) in finished:
+            continue
         ref = Reference(composuite, robot, obj, obstacle, objective)
         rec = task_record(robot, obj, obstacle, objective)
         rec["design_index"] = design_tasks().index((robot, obj, obstacle, objective))
@@ -556,7 +572,7 @@ def run_random(args, composuite):
                 _obs, reward, done, _info = ref.gym.step(action)
                 total += reward
                 length += 1
-                hit_one = hit_one or reward == 1.0
+                hit_one = hit_one or bool(reward == 1.0)  # reward is a numpy float
                 hit_check = hit_check or ref.success()
                 if done:
                     terminated = True
@@ -571,11 +587,16 @@ def run_random(args, composuite):
                 "first_action": first_action,  # full precision, to check the port's PCG64 stream
             })
         ref.close()
-        results.append(rec)
+        partial.write(json.dumps(rec, separators=(",", ":")) + "\n")
+        partial.flush()
+        finished[rec["name"]] = rec
+        n_new += 1
         returns = [ep["return"] for ep in rec["episodes"]]
         elapsed = time.time() - t_start
-        log(f"random: {k + 1}/{len(tasks)} {rec['name']}: mean return {np.mean(returns):.3f} "
-            f"({elapsed:.0f}s, eta {elapsed / (k + 1) * (len(tasks) - k - 1):.0f}s)")
+        log(f"random: {len(finished)}/{len(tasks)} {rec['name']}: mean return {np.mean(returns):.3f} "
+            f"({elapsed:.0f}s, eta {elapsed / n_new * (len(tasks) - len(finished)):.0f}s)")
+    partial.close()
+    results = [finished[port_name(*t)] for t in tasks]
 
     meta = base_meta(args, composuite, "random")
     meta.update({
@@ -598,6 +619,7 @@ def run_random(args, composuite):
         json.dump({"meta": meta, "tasks": results}, f, indent=1, allow_nan=False)
         f.write("\n")
     log(f"wrote {path} ({os.path.getsize(path)} bytes)")
+    os.remove(partial_path)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -626,7 +648,8 @@ def main():
     parser.add_argument("--episodes", type=int, default=10,
                         help="random part: episodes per task (default 10)")
     parser.add_argument("--resume", action="store_true",
-                        help="step0: continue from OUT/.step0.partial.jsonl left by an interrupted run")
+                        help="step0 / random: continue from OUT/.step0.partial.jsonl or "
+                             "OUT/.random.partial.jsonl left by an interrupted run")
     parser.add_argument("--composuite-commit", default=DEFAULT_COMPOSUITE_COMMIT,
                         help="CompoSuite commit recorded in the meta (default: %(default)s)")
     args = parser.parse_args()

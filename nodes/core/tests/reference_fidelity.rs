@@ -9,14 +9,11 @@ use composuite_core::env::{Action, Env, EnvConfig};
 use composuite_core::reward::staged_reward;
 use reference::{divergence, layout};
 
-/// Every value of every recorded step-0 observation, quaternions included (seeds 0–4).
+/// Every value of every step-0 observation, quaternions included: all 256 tasks × seeds 0–4.
 #[test]
-fn step0_observations_equal_the_references_for_every_recorded_task_and_seed() {
+fn step0_observations_equal_the_references_for_every_task_and_seed() {
     let cases = reference::step0();
-    // The committed file holds the first 227 tasks in the reference's order (every IIWA, Jaco
-    // and Gen3 task and 35 of the Panda's; tests/reference/README.md); all 256 once re-recorded.
-    assert!(cases.len() >= 227 * 5, "{} cases", cases.len());
-    assert_eq!(cases.len() % 5, 0, "five seeds per task");
+    assert_eq!(cases.len(), 256 * 5, "every task, seeds 0-4");
     let mut differences = Vec::new();
     for case in &cases {
         let mut env = Env::new(case.task, EnvConfig::default());
