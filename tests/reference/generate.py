@@ -363,21 +363,30 @@ def write_json_gz(path, payload):
     log(f"wrote {path} ({os.path.getsize(path)} bytes, {len(raw)} uncompressed)")
 
 
+def load_partial(path, resume, part, keep=lambda rec: True):
+    """The task records an interrupted run appended to `path` (one JSON line per finished task),
+    by task name, when resuming (only those `keep` accepts); otherwise the file is removed and the
+    run starts afresh."""
+    done = {}
+    if resume and os.path.exists(path):
+        with open(path) as f:
+            for line in f:
+                rec = json.loads(line)
+                if keep(rec):
+                    done[rec["name"]] = rec
+        log(f"{part}: resuming, {len(done)} tasks already recorded in {path}")
+    elif os.path.exists(path):
+        os.remove(path)
+    return done
+
+
 # ------------------------------------------------------------------------------------------------
 # Part a: observation right after reset, all tasks
 # ------------------------------------------------------------------------------------------------
 def run_step0(args, composuite):
     tasks = filter_tasks(all_tasks(), args.tasks)
     partial_path = os.path.join(args.out, ".step0.partial.jsonl")
-    done = {}
-    if args.resume and os.path.exists(partial_path):
-        with open(partial_path) as f:
-            for line in f:
-                rec = json.loads(line)
-                done[rec["name"]] = rec
-        log(f"step0: resuming, {len(done)} tasks already recorded in {partial_path}")
-    elif os.path.exists(partial_path):
-        os.remove(partial_path)
+    done = load_partial(partial_path, args.resume, "step0")
 
     layout = None
     t_start = time.time()
@@ -541,16 +550,8 @@ def run_random(args, composuite):
     # Finished tasks are appended to a partial file, so --resume can continue an interrupted run
     # (same mechanism as step0).
     partial_path = os.path.join(args.out, ".random.partial.jsonl")
-    finished = {}
-    if args.resume and os.path.exists(partial_path):
-        with open(partial_path) as f:
-            for line in f:
-                rec = json.loads(line)
-                if len(rec["episodes"]) == args.episodes:
-                    finished[rec["name"]] = rec
-        log(f"random: resuming, {len(finished)} tasks already recorded in {partial_path}")
-    elif os.path.exists(partial_path):
-        os.remove(partial_path)
+    finished = load_partial(partial_path, args.resume, "random",
+                            keep=lambda rec: len(rec["episodes"]) == args.episodes)
     partial = open(partial_path, "a")
     t_start = time.time()
     n_new = 0
