@@ -23,7 +23,7 @@ fn main() {
     // key → per checkpoint (sum, count)
     let mut table: BTreeMap<String, [(Divergence, usize); 3]> = BTreeMap::new();
     for trajectory in &trajectories {
-        let ours = trajectory.replay(EnvConfig::default());
+        let ours = trajectory.replay(EnvConfig::default()).observations;
         let task = trajectory.task;
         for key in [
             format!("objective {}", task.objective.wire_name()),
@@ -73,8 +73,7 @@ fn main() {
         let mut unequal = 0;
         let mut half_turns: BTreeMap<String, (usize, usize)> = BTreeMap::new();
         for case in &cases {
-            let mut env = composuite_core::env::Env::new(case.task, EnvConfig::default());
-            let ours = env.reset(case.seed).expect("reset").flat();
+            let ours = case.ours();
             let mut any = false;
             for (i, (a, b)) in ours.iter().zip(&case.observation).enumerate() {
                 let d = (a - b).abs();

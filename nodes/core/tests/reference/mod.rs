@@ -110,6 +110,14 @@ pub struct Step0 {
     pub observation: Vec<f64>,
 }
 
+impl Step0 {
+    /// The port's observation for the same task and seed.
+    pub fn ours(&self) -> Vec<f64> {
+        let mut env = Env::new(self.task, EnvConfig::default());
+        env.reset(self.seed).expect("reset").flat()
+    }
+}
+
 /// Every task × seed of `step0.json.gz` (256 × 5).
 pub fn step0() -> Vec<Step0> {
     let data = load("step0.json.gz");
@@ -159,19 +167,31 @@ impl Trajectory {
         }
     }
 
-    /// The port's observations for the same seed and actions, record for record (stops where
-    /// the port ends the episode).
-    pub fn replay(&self, config: EnvConfig) -> Vec<Vec<f64>> {
+    /// The port's observations and rewards for the same seed and actions, record for record
+    /// (stops where the port ends the episode).
+    pub fn replay(&self, config: EnvConfig) -> Replay {
         let mut env = Env::new(self.task, config);
-        let mut out = vec![env.reset(self.seed).expect("reset").flat()];
+        let mut replay = Replay {
+            observations: vec![env.reset(self.seed).expect("reset").flat()],
+            rewards: vec![None],
+        };
         for action in self.actions.iter().take(self.observations.len() - 1) {
             match env.step(&Action::Reference(*action)) {
-                Ok(step) => out.push(step.observation.flat()),
+                Ok(step) => {
+                    replay.observations.push(step.observation.flat());
+                    replay.rewards.push(Some(step.reward));
+                }
                 Err(_) => break,
             }
         }
-        out
+        replay
     }
+}
+
+/// The port's side of a [`Trajectory`], laid out like it: `None` reward for record 0.
+pub struct Replay {
+    pub observations: Vec<Vec<f64>>,
+    pub rewards: Vec<Option<f64>>,
 }
 
 /// The 32 recorded episodes (16 tasks covering every element 4 times × seeds 0 and 1).
