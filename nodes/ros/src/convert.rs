@@ -10,7 +10,7 @@ use composuite_core::axes::AxisElement;
 use composuite_core::env::{EnvConfig, EpisodeLayout, WorldState};
 use composuite_core::obs::{self, RelativePose};
 use composuite_core::physics::{ARM_DOF, FINGER_JOINTS, RobotModel};
-use composuite_core::reward::StagedReward;
+use composuite_core::reward::{RewardConfig, StagedReward};
 use composuite_msgs::builtin_interfaces::msg::Time;
 use composuite_msgs::geometry_msgs::msg::{Point, Pose, Quaternion, Vector3};
 use composuite_msgs::msg;
@@ -146,8 +146,14 @@ pub fn observation(o: &obs::Observation, stamp: Time, episode: u32, step: u32) -
     }
 }
 
-/// The wire form of a staged reward.
-pub fn staged_reward(r: &StagedReward, stamp: Time, episode: u32, step: u32) -> msg::StagedReward {
+/// The wire form of a staged reward; `total` is the reward an agent gets under `config`.
+pub fn staged_reward(
+    r: &StagedReward,
+    config: &RewardConfig,
+    stamp: Time,
+    episode: u32,
+    step: u32,
+) -> msg::StagedReward {
     msg::StagedReward {
         header: header(stamp),
         episode,
@@ -157,7 +163,7 @@ pub fn staged_reward(r: &StagedReward, stamp: Time, episode: u32, step: u32) -> 
         stage_values: r.stages.iter().map(|s| s.value).collect(),
         stage_maxima: r.stages.iter().map(|s| s.max).collect(),
         current_stage: r.current_stage().map_or(-1, |i| i as i8),
-        total: r.total,
+        total: config.reward(r),
         success: r.success,
     }
 }

@@ -71,8 +71,8 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let mut early: Vec<msg::WorldState> = Vec::new();
     let score = |task: TaskSpec, w: &msg::WorldState| {
         let r = staged_reward(task.objective, task.object, &convert::snapshot(w));
-        let mut message = convert::staged_reward(&r, w.header.stamp.clone(), w.episode, w.step);
-        message.total = config.get().reward(&r);
+        let message =
+            convert::staged_reward(&r, &config.get(), w.header.stamp.clone(), w.episode, w.step);
         // Publishing only fails when DDS is shutting down.
         let _ = reward_pub.publish(message);
         let _ = success_pub.publish(Bool { data: r.success });

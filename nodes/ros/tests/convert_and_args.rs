@@ -94,6 +94,7 @@ fn staged_reward_and_world_state_messages() {
     let step = env.step(&Action::Reference([0.0; 8])).unwrap();
     let r = convert::staged_reward(
         &step.info.staged,
+        &EnvConfig::default().reward,
         convert::time_from_nanos(50_000_000),
         1,
         1,
