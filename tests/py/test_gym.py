@@ -165,18 +165,22 @@ def test_suite_not_running_names_the_namespace(suite):
         CompoSuiteRosEnv(TASKS[0], "/nobody_here", timeout=1.5)
 
 
-def test_close_leaves_no_thread_or_endpoint(suite):
+def test_close_leaves_no_thread_or_endpoint(env, suite):
+    # The module's `env` fixture is alive and publishes on the same topic: wait until the new probe
+    # has discovered it, so the baseline is known (1) rather than whatever discovery reached so far.
     before = threading.active_count()
     probe = composuite_ros._link.Participant("probe")
     try:
         topic = "/gym/reference_action"
-        baseline = probe.node.count_publishers(topic)
-        env = CompoSuiteRosEnv(TASKS[0], "/gym")
+        baseline = 1
+        assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline, 20.0), \
+            "the probe never discovered the module env's publisher"
+        closing = CompoSuiteRosEnv(TASKS[0], "/gym")
         assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline + 1, 20.0)
-        env.reset(seed=1)
-        env.step(np.zeros(8))
-        env.close()
-        assert not env._participant.context.ok()
+        closing.reset(seed=1)
+        closing.step(np.zeros(8))
+        closing.close()
+        assert not closing._participant.context.ok()
         # Gone from the graph: at once when the participant's goodbye arrives, else after the
         # DDS lease (Fast DDS: 20 s).
         assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline, 30.0), \
