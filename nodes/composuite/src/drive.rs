@@ -15,8 +15,8 @@ use composuite_core::physics::{ARM_DOF, FINGER_JOINTS, finger_for_gap, pad_gap, 
 use composuite_msgs::msg;
 use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::srv;
-use composuite_ros::node::{NodeSpec, RosNode, Startup};
-use composuite_ros::{convert, names, qos};
+use composuite_ros::shared::node::{NodeSpec, RosNode, Startup};
+use composuite_ros::shared::{convert, names, qos};
 use futures::{FutureExt, StreamExt};
 use rand::{Rng, SeedableRng};
 
@@ -170,7 +170,7 @@ pub fn drive(
         Startup::Node(node) => node,
         Startup::Help(_) => unreachable!("no --help given"),
     };
-    let e = |e: composuite_ros::node::StartError| e.to_string();
+    let e = |e: composuite_ros::shared::node::StartError| e.to_string();
     let command = node
         .publisher::<JointState>(names::JOINT_COMMAND, qos::state())
         .map_err(e)?;

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use composuite_core::TaskSpec;
 use composuite_ros::nodes::NodeKind;
-use composuite_ros::ros_args::is_valid_name;
+use composuite_ros::shared::ros_args::is_valid_name;
 
 /// How long nodes get to exit after SIGINT before they are killed.
 const GRACE: Duration = Duration::from_secs(5);
@@ -143,7 +143,7 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
         ));
     }
     if let Some(mapping) = &args.service_mapping {
-        composuite_ros::node::service_mapping(mapping)
+        composuite_ros::shared::node::service_mapping(mapping)
             .map_err(|e| format!("--service-mapping: {e}"))?;
     }
     let namespace_ok = args.namespace == "/"
@@ -432,7 +432,7 @@ impl LaunchArgs {
 
 /// Run the suite until a signal, `--duration`, or a node's death.
 pub fn run(args: &LaunchArgs) -> Result<(), String> {
-    let signals = composuite_ros::node::shutdown_signal()
+    let signals = composuite_ros::shared::node::shutdown_signal()
         .map_err(|e| format!("cannot watch for signals: {e}"))?;
     let mut suite = Suite::start(args)?;
     eprintln!(

@@ -19,7 +19,7 @@ use composuite_core::physics::robot_model;
 use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::{cdr, msg};
 use composuite_ros::bag::reader::for_each_message;
-use composuite_ros::convert;
+use composuite_ros::shared::convert;
 
 use crate::bag::namespace_of;
 

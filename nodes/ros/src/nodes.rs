@@ -4,7 +4,7 @@
 use std::fmt;
 use std::process::ExitCode;
 
-use crate::node::{NodeSpec, run_node};
+use crate::shared::node::{NodeSpec, run_node};
 
 /// One of the suite's nodes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

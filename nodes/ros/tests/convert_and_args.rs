@@ -2,8 +2,8 @@
 
 use composuite_core::env::{Action, Env, EnvConfig, EpisodeLayout};
 use composuite_msgs::{RosMessage, cdr, msg};
-use composuite_ros::convert::{self, JointCommandError};
-use composuite_ros::ros_args::{self, ParamValue};
+use composuite_ros::shared::convert::{self, JointCommandError};
+use composuite_ros::shared::ros_args::{self, ParamValue};
 
 fn args(text: &str) -> Vec<String> {
     text.split_whitespace().map(String::from).collect()
@@ -207,7 +207,7 @@ fn bad_ros_args_say_what_is_valid() {
 
 #[test]
 fn ros_environment_is_read_and_checked() {
-    use composuite_ros::environment::{DiscoveryRange, RosEnvironment};
+    use composuite_ros::shared::environment::{DiscoveryRange, RosEnvironment};
     let env = |pairs: &'static [(&'static str, &'static str)]| {
         move |k: &str| {
             pairs
@@ -243,7 +243,7 @@ fn ros_environment_is_read_and_checked() {
 
 #[test]
 fn qos_profiles_follow_ros_defaults() {
-    use composuite_ros::qos;
+    use composuite_ros::shared::qos;
     use ros2_client::qos::{Durability, History, Reliability};
     assert!(matches!(
         qos::state().reliability,

@@ -22,7 +22,7 @@ use ros2_client::rcl_interfaces::{
 };
 use ros2_client::{Message, Name, Parameter, ParameterValue, ServiceTypeName};
 
-use crate::params::ParamSpec;
+use crate::shared::params::ParamSpec;
 
 /// The built-in parameter every ROS node has; ours are the clock, so it stays false.
 pub const USE_SIM_TIME: &str = "use_sim_time";
@@ -168,7 +168,7 @@ where
 {
     let name = Name::parse(&format!("{fully_qualified}/{service}"))
         .map_err(|e| format!("parameter service {service}: {e:?}"))?;
-    let qos = crate::qos::parameter_services();
+    let qos = crate::shared::qos::parameter_services();
     node.create_server(
         mapping,
         &name,

@@ -21,8 +21,8 @@ use ros2_client::dds::rustdds::{
 
 use crate::bag::definitions::ros_type_name;
 use crate::bag::{BagError, BagOptions, BagWriter, OfferedQos, TopicId};
-use crate::node::RosNode;
-use crate::params::{ParamSpec, any_value};
+use crate::shared::node::RosNode;
+use crate::shared::params::{ParamSpec, any_value};
 
 /// How often the recorder looks for new publishers.
 const DISCOVERY_PERIOD: Duration = Duration::from_millis(100);
@@ -93,7 +93,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "flush_period",
         default: || ParameterValue::Double(1.0),
         description: "seconds between chunk flushes: at most this much is lost to a SIGKILL",
-        check: crate::params::positive_number,
+        check: crate::shared::params::positive_number,
     },
 ];
 
@@ -348,7 +348,7 @@ fn write_sample(
     bag: &mut BagWriter,
     topic: TopicId,
     sample: rustdds::dds::ReadResult<no_key::DataSample<RawSample>>,
-    log: &crate::node::Logger,
+    log: &crate::shared::node::Logger,
 ) -> Result<(), BagError> {
     let sample = match sample {
         Ok(s) => s,

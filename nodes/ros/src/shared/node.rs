@@ -22,11 +22,11 @@ use ros2_client::{
     ServiceTypeName,
 };
 
-use crate::dds_log;
-use crate::environment::{DiscoveryRange, RosEnvironment};
-use crate::param_server::{ParameterServices, Parameters};
-use crate::params::{self, ParamSpec};
-use crate::ros_args::{self, RosArgs};
+use crate::shared::dds_log;
+use crate::shared::environment::{DiscoveryRange, RosEnvironment};
+use crate::shared::param_server::{ParameterServices, Parameters};
+use crate::shared::params::{self, ParamSpec};
+use crate::shared::ros_args::{self, RosArgs};
 
 /// Log severities, ordered (rcutils' levels).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -207,7 +207,7 @@ pub fn show_value(v: &ParameterValue) -> String {
     }
 }
 
-pub use crate::param_server::ParamChange;
+pub use crate::shared::param_server::ParamChange;
 
 /// Parameters every node of the suite has, after its own.
 pub const COMMON_PARAMS: &[ParamSpec] = &[ParamSpec {
@@ -462,7 +462,7 @@ impl RosNode {
         S::Response: Message,
     {
         let (service_name, type_name) = self.service::<S>(name)?;
-        let qos = crate::qos::services();
+        let qos = crate::shared::qos::services();
         self.node
             .create_server(
                 self.service_mapping,
@@ -484,7 +484,7 @@ impl RosNode {
         S::Response: Message,
     {
         let (service_name, type_name) = self.service::<S>(name)?;
-        let qos = crate::qos::services();
+        let qos = crate::shared::qos::services();
         self.node
             .create_client(
                 self.service_mapping,

@@ -18,7 +18,7 @@ use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::std_msgs::msg::Header;
 use nalgebra::Isometry3;
 
-use crate::names::WORLD_FRAME;
+use crate::shared::names::WORLD_FRAME;
 
 /// A `builtin_interfaces/Time` from nanoseconds of sim time (exact: no float rounding).
 pub fn time_from_nanos(nanos: u64) -> Time {

@@ -9,11 +9,11 @@ use composuite_msgs::std_msgs::msg::Bool;
 use futures::{FutureExt, StreamExt};
 use ros2_client::ParameterValue;
 
-use crate::convert;
-use crate::names;
-use crate::node::RosNode;
-use crate::params::{ParamSpec, any_value};
-use crate::qos;
+use crate::shared::convert;
+use crate::shared::names;
+use crate::shared::node::RosNode;
+use crate::shared::params::{ParamSpec, any_value};
+use crate::shared::qos;
 
 /// World states kept while their episode's scene is on its way.
 const MAX_EARLY: usize = 64;
@@ -43,7 +43,7 @@ pub const PARAMS: &[ParamSpec] = &[
 
 /// Run the reward node until SIGINT/SIGTERM.
 pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<(), String> {
-    let e = |e: crate::node::StartError| e.to_string();
+    let e = |e: crate::shared::node::StartError| e.to_string();
     let reward_pub = node
         .publisher::<msg::StagedReward>(names::REWARD, qos::state())
         .map_err(e)?;

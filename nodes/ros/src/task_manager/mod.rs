@@ -20,11 +20,11 @@ use ros2_client::ParameterValue;
 use ros2_client::RmwRequestId;
 use ros2_client::dds::{Publisher, Server};
 
-use crate::convert;
-use crate::names;
-use crate::node::{Logger, ParamChange, RosNode};
-use crate::params::{ParamSpec, any_value, positive_number};
-use crate::qos;
+use crate::shared::convert;
+use crate::shared::names;
+use crate::shared::node::{Logger, ParamChange, RosNode};
+use crate::shared::params::{ParamSpec, any_value, positive_number};
+use crate::shared::qos;
 
 /// The task a suite starts with when nothing else is asked.
 pub const DEFAULT_TASK: &str = "IIWA/box/no_obstacle/pick_place";
@@ -127,7 +127,7 @@ struct TaskManager {
 
 /// Run the task manager until SIGINT/SIGTERM.
 pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<(), String> {
-    let e = |e: crate::node::StartError| e.to_string();
+    let e = |e: crate::shared::node::StartError| e.to_string();
     let scene = node.publisher(names::SCENE, qos::latched()).map_err(e)?;
     let status = node.publisher(names::EPISODE, qos::state()).map_err(e)?;
     let world_sub = node

@@ -34,11 +34,11 @@ use futures::{FutureExt, StreamExt};
 use ros2_client::dds::Publisher;
 use ros2_client::{Gid, ParameterValue};
 
-use crate::convert;
-use crate::names;
-use crate::node::{ParamChange, RosNode};
-use crate::params::{ParamSpec, any_value, positive_number};
-use crate::qos;
+use crate::shared::convert;
+use crate::shared::names;
+use crate::shared::node::{ParamChange, RosNode};
+use crate::shared::params::{ParamSpec, any_value, positive_number};
+use crate::shared::qos;
 
 fn check_mode(v: &ParameterValue) -> Result<(), String> {
     match v {
@@ -154,7 +154,7 @@ struct Sim {
 
 /// Run the sim node until SIGINT/SIGTERM.
 pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<(), String> {
-    let e = |e: crate::node::StartError| e.to_string();
+    let e = |e: crate::shared::node::StartError| e.to_string();
     let pubs = Publishers {
         joint_states: node
             .publisher(names::JOINT_STATES, qos::state())
@@ -259,7 +259,7 @@ impl Sim {
         }
     }
 
-    fn on_param(&mut self, change: &ParamChange, log: &crate::node::Logger) {
+    fn on_param(&mut self, change: &ParamChange, log: &crate::shared::node::Logger) {
         match (change.name.as_str(), &change.value) {
             ("mode", ParameterValue::String(s)) => {
                 if let Some(mode) = Mode::parse(s) {
@@ -276,7 +276,7 @@ impl Sim {
         }
     }
 
-    fn on_scene(&mut self, scene: &msg::Scene, writer: Gid, log: &crate::node::Logger) {
+    fn on_scene(&mut self, scene: &msg::Scene, writer: Gid, log: &crate::shared::node::Logger) {
         let task: TaskSpec = match convert::task_of(&scene.task) {
             Ok(task) => task,
             Err(err) => {
@@ -348,7 +348,7 @@ impl Sim {
         self.publish_state();
     }
 
-    fn on_gripper(&mut self, command: &GripperCommand, log: &crate::node::Logger) {
+    fn on_gripper(&mut self, command: &GripperCommand, log: &crate::shared::node::Logger) {
         let Some(run) = &mut self.run else {
             log.warn(
                 "gripper_command ignored: no episode yet (the task manager publishes the scene)",
@@ -367,7 +367,7 @@ impl Sim {
         }
     }
 
-    fn on_joint_command(&mut self, command: &JointState, log: &crate::node::Logger) {
+    fn on_joint_command(&mut self, command: &JointState, log: &crate::shared::node::Logger) {
         let Some(run) = &mut self.run else {
             log.warn(
                 "joint_command ignored: no episode yet (the task manager publishes the scene)",
@@ -406,7 +406,11 @@ impl Sim {
         }
     }
 
-    fn on_reference_action(&mut self, action: &Float64MultiArray, log: &crate::node::Logger) {
+    fn on_reference_action(
+        &mut self,
+        action: &Float64MultiArray,
+        log: &crate::shared::node::Logger,
+    ) {
         let Some(run) = &mut self.run else {
             log.warn(
                 "reference_action ignored: no episode yet (the task manager publishes the scene)",
@@ -440,7 +444,7 @@ impl Sim {
     }
 
     /// One control period with the held targets.
-    fn step(&mut self, log: &crate::node::Logger) {
+    fn step(&mut self, log: &crate::shared::node::Logger) {
         let Some(run) = &mut self.run else { return };
         let action = match run.held {
             HeldCommand::Targets(joints) => Action::Absolute {

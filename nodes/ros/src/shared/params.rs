@@ -8,7 +8,7 @@ use std::path::Path;
 use ros2_client::ParameterValue;
 use yaml_rust2::{Yaml, YamlLoader};
 
-use crate::ros_args::{ParamValue, RosArgs};
+use crate::shared::ros_args::{ParamValue, RosArgs};
 
 /// One declared parameter.
 #[derive(Debug, Clone)]

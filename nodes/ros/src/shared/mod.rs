@@ -1,0 +1,22 @@
+//! What every node shares: start-up, parameters, logging, names, QoS and the conversions between
+//! the core's types and messages.
+//!
+//! - [`convert`]: core types to `composuite_msgs` and standard messages, and incoming commands
+//!   back (by joint name, with errors that name what is valid);
+//! - [`names`]: the topic and service names, relative so a namespace can hold one environment;
+//! - [`ros_args`]: the `--ros-args` command line every ROS 2 node accepts;
+//! - [`qos`]: the QoS profile of each kind of topic;
+//! - [`environment`]: `ROS_DOMAIN_ID` and the discovery range, which ros2-client does not read;
+//! - [`node`], [`params`] and [`param_server`]: start-up, parameters and their services,
+//!   logging, signals;
+//! - [`dds_log`]: RustDDS's log output, quietened where it reports expected events.
+
+pub mod convert;
+pub mod dds_log;
+pub mod environment;
+pub mod names;
+pub mod node;
+pub mod param_server;
+pub mod params;
+pub mod qos;
+pub mod ros_args;
