@@ -1,5 +1,6 @@
-//! Generates the Rust types from `msg/`, `srv/` (this package) and `standard/<package>/` (the
-//! standard ROS 2 messages the suite uses). See `composuite_msgs_codegen`.
+//! Generates the Rust types from `msg/`, `srv/` (this package), `standard/<package>/` (the
+//! standard ROS 2 messages the suite uses) and `ros2_control/<package>/` (the ros2_control
+//! interfaces the sim's controllers offer). See `composuite_msgs_codegen`.
 
 use std::path::{Path, PathBuf};
 
@@ -20,7 +21,7 @@ fn main() {
     for path in &watched {
         println!("cargo:rerun-if-changed={}", path.display());
     }
-    for dir in ["msg", "srv", "standard"] {
+    for dir in ["msg", "srv", "standard", "ros2_control"] {
         println!("cargo:rerun-if-changed={}", root.join(dir).display());
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo")).join("generated.rs");
@@ -33,12 +34,16 @@ fn load(root: &Path, registry: &mut Registry, watched: &mut Vec<PathBuf>) -> Res
             .load_package("composuite_msgs", root)
             .map_err(|e| e.to_string())?,
     );
-    let standard = root.join("standard");
-    let mut packages: Vec<PathBuf> = std::fs::read_dir(&standard)
-        .map_err(|e| format!("{}: {e}", standard.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_dir())
-        .collect();
+    let mut packages = Vec::new();
+    for folder in ["standard", "ros2_control"] {
+        let folder = root.join(folder);
+        packages.extend(
+            std::fs::read_dir(&folder)
+                .map_err(|e| format!("{}: {e}", folder.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_dir()),
+        );
+    }
     packages.sort();
     for dir in packages {
         let package = dir

@@ -18,20 +18,24 @@ fn source_text(ros_name: &str) -> Option<String> {
     let (package, kind, name) = (parts[0], parts[1], parts[2]);
     let base: PathBuf = if package == "composuite_msgs" {
         msgs_dir()
-    } else {
+    } else if msgs_dir().join("standard").join(package).is_dir() {
         msgs_dir().join("standard").join(package)
+    } else {
+        msgs_dir().join("ros2_control").join(package)
     };
     if kind == "msg" {
         return std::fs::read_to_string(base.join("msg").join(format!("{name}.msg"))).ok();
     }
-    let (service, half) = name.rsplit_once('_')?;
-    let text = std::fs::read_to_string(base.join("srv").join(format!("{service}.srv"))).ok()?;
-    let (request, response) = text.split_once("---\n")?;
-    match half {
-        "Request" => Some(request.to_string()),
-        "Response" => Some(response.to_string()),
-        _ => None, // `_Event` is synthesized, it has no file
-    }
+    let (file, part) = name.rsplit_once('_')?;
+    let text = std::fs::read_to_string(base.join(kind).join(format!("{file}.{kind}"))).ok()?;
+    let parts: Vec<&str> = text.split("---\n").collect();
+    let index = match (kind, part) {
+        ("srv", "Request") | ("action", "Goal") => 0,
+        ("srv", "Response") | ("action", "Result") => 1,
+        ("action", "Feedback") => 2,
+        _ => return None, // `_Event` is synthesized, it has no file
+    };
+    parts.get(index).map(|p| p.to_string())
 }
 
 /// Field names of a .msg text by a plain line scan, independent of the code generator.
@@ -121,10 +125,14 @@ fn every_interface_file_has_a_type_and_fields_match() {
     };
     count(&msgs_dir().join("msg"), "msg", 1);
     count(&msgs_dir().join("srv"), "srv", 2);
-    for package in std::fs::read_dir(msgs_dir().join("standard")).unwrap() {
-        let msg_dir = package.unwrap().path().join("msg");
-        if msg_dir.is_dir() {
-            count(&msg_dir, "msg", 1);
+    for folder in ["standard", "ros2_control"] {
+        for package in std::fs::read_dir(msgs_dir().join(folder)).unwrap() {
+            let package = package.unwrap().path();
+            for (kind, per_file) in [("msg", 1), ("srv", 2), ("action", 3)] {
+                if package.join(kind).is_dir() {
+                    count(&package.join(kind), kind, per_file);
+                }
+            }
         }
     }
     assert_eq!(
@@ -138,7 +146,7 @@ fn names_follow_ros_2_conventions() {
     for (ros_name, _, dds_name, ..) in all_types() {
         let parts: Vec<&str> = ros_name.split('/').collect();
         assert_eq!(parts.len(), 3, "{ros_name}");
-        assert!(parts[1] == "msg" || parts[1] == "srv", "{ros_name}");
+        assert!(matches!(parts[1], "msg" | "srv" | "action"), "{ros_name}");
         assert_eq!(
             dds_name,
             format!("{}::{}::dds_::{}_", parts[0], parts[1], parts[2])
@@ -156,8 +164,8 @@ fn names_follow_ros_2_conventions() {
 #[test]
 fn jazzy_type_hashes_pinned() {
     use composuite_msgs::{
-        builtin_interfaces, geometry_msgs, rcl_interfaces, rosgraph_msgs, sensor_msgs,
-        service_msgs, std_msgs,
+        builtin_interfaces, control_msgs, controller_manager_msgs, geometry_msgs, rcl_interfaces,
+        rosgraph_msgs, sensor_msgs, service_msgs, std_msgs, trajectory_msgs,
     };
     let pins = [
         (
@@ -213,6 +221,64 @@ fn jazzy_type_hashes_pinned() {
         (
             rcl_interfaces::msg::ParameterValue::TYPE_HASH,
             "115fc089a387e23c7ecd3525c9189c379109119d6ab82e8dfbde0fdf6a7f9b68",
+        ),
+        // ros2_control's interfaces (msgs/ros2_control/): the hashes a colcon build of
+        // control_msgs 5.8.0 / controller_manager_msgs 4.46.0 / trajectory_msgs 5.3.5 generates.
+        (
+            trajectory_msgs::msg::JointTrajectory::TYPE_HASH,
+            "179b33eba59d676f6d967ac71fe35e7ca2f64b2f3928f4a018cec115e213796e",
+        ),
+        (
+            trajectory_msgs::msg::JointTrajectoryPoint::TYPE_HASH,
+            "de8907036d8bd45aac6f30cc9044a3d4a329c42cbf719aff7d95a584cfa532d7",
+        ),
+        (
+            control_msgs::action::FollowJointTrajectoryGoal::TYPE_HASH,
+            "8a9060704b269608f5a340934cc26e66869dd14bdac29e2e7fd9ec8b9882d205",
+        ),
+        (
+            control_msgs::action::FollowJointTrajectoryResult::TYPE_HASH,
+            "8002e99ed2c14c6faa522f2a93c26d744c5982f254f9e98ff9c6f19789bdb220",
+        ),
+        (
+            control_msgs::action::FollowJointTrajectoryFeedback::TYPE_HASH,
+            "3fd0aaecf71725121ae1ff7f01098a5e0da581e672be18a6b2c286cb43d96b49",
+        ),
+        (
+            control_msgs::action::GripperCommandGoal::TYPE_HASH,
+            "607d9f41eb241e1922e90f02125e87ae6bfb78f7f64a71dc92630263d01f8b6d",
+        ),
+        (
+            control_msgs::action::GripperCommandResult::TYPE_HASH,
+            "bf512d5aa6a0e4fe4d8be22b2ec4a1973c3d250fa1f65e47450322c25c45c0a0",
+        ),
+        (
+            control_msgs::action::GripperCommandFeedback::TYPE_HASH,
+            "8f7c520077bab528bb9161ee3b83c81eee1f8aecadb8922ce82c79d667a819c4",
+        ),
+        (
+            control_msgs::msg::GripperCommand::TYPE_HASH,
+            "57eb8f326c9889ca8bb34ead82cc94cc09bf6bc5c3b6c09546dca3a00b589890",
+        ),
+        (
+            control_msgs::msg::JointTolerance::TYPE_HASH,
+            "c254f9cece0f3b733017b6990fd46d1326e25242d6b8844398c97d9a88e7d648",
+        ),
+        (
+            controller_manager_msgs::msg::ControllerState::TYPE_HASH,
+            "9a8780ab9814b6032978a07c6c7033cf1a7894ac8d948a6fb72afea07b04cc83",
+        ),
+        (
+            controller_manager_msgs::msg::HardwareInterface::TYPE_HASH,
+            "b4c556991db81ca56a49338b5e8f0675a6707faee54fba161d2bbd4d963d418a",
+        ),
+        (
+            <controller_manager_msgs::srv::ListControllers as composuite_msgs::RosService>::TYPE_HASH,
+            "4f8e36bb1fa5afdeba45c2d56ae6a2097b1493a253f961dd6290c085033bd189",
+        ),
+        (
+            <controller_manager_msgs::srv::ListHardwareInterfaces as composuite_msgs::RosService>::TYPE_HASH,
+            "c3e561a6e8cc7b9d577d8065c783038e51f6950cbe9bed67fb117a3e2e04d8f1",
         ),
         // `char[16]` hashes as uint8[16] in Jazzy.
         (

@@ -5,7 +5,8 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use crate::spec::{
-    self, ArrayKind, BaseType, Field, FieldType, MessageSpec, ParseError, ServiceSpec, TypeName,
+    self, ActionSpec, ArrayKind, BaseType, Field, FieldType, MessageSpec, ParseError, ServiceSpec,
+    TypeName,
 };
 
 /// Why loading interface files failed.
@@ -56,14 +57,18 @@ pub struct Registry {
     pub messages: BTreeMap<TypeName, MessageSpec>,
     /// Services by full name.
     pub services: BTreeMap<TypeName, ServiceSpec>,
+    /// Actions by full name; their parts appear as messages `pkg/action/Name_Goal`, `_Result`,
+    /// `_Feedback` (the wrappers around them on the wire come from ros2-client).
+    pub actions: BTreeMap<TypeName, ActionSpec>,
 }
 
 impl Registry {
-    /// Load every `msg/*.msg` and `srv/*.srv` under `dir` as package `package`. Returns the
-    /// files read, sorted, so a build script can watch them.
+    /// Load every `msg/*.msg`, `srv/*.srv` and `action/*.action` under `dir` as package
+    /// `package`. Returns the files read, sorted, so a build script can watch them.
     pub fn load_package(&mut self, package: &str, dir: &Path) -> Result<Vec<PathBuf>, LoadError> {
         let mut read = Vec::new();
-        for (kind, extension) in [("msg", "msg"), ("srv", "srv")] {
+        for kind in ["msg", "srv", "action"] {
+            let extension = kind;
             for path in sorted_files(&dir.join(kind), extension)? {
                 let text =
                     std::fs::read_to_string(&path).map_err(|e| LoadError::Io(path.clone(), e))?;
@@ -77,16 +82,25 @@ impl Registry {
                     file: path.display().to_string(),
                     ..e
                 };
-                if kind == "msg" {
-                    let msg = spec::parse_message(name, &text)
-                        .map_err(located)
-                        .map_err(LoadError::Parse)?;
-                    self.insert_message(msg)?;
-                } else {
-                    let srv = spec::parse_service(name, &text)
-                        .map_err(located)
-                        .map_err(LoadError::Parse)?;
-                    self.insert_service(srv)?;
+                match kind {
+                    "msg" => {
+                        let msg = spec::parse_message(name, &text)
+                            .map_err(located)
+                            .map_err(LoadError::Parse)?;
+                        self.insert_message(msg)?;
+                    }
+                    "srv" => {
+                        let srv = spec::parse_service(name, &text)
+                            .map_err(located)
+                            .map_err(LoadError::Parse)?;
+                        self.insert_service(srv)?;
+                    }
+                    _ => {
+                        let action = spec::parse_action(name, &text)
+                            .map_err(located)
+                            .map_err(LoadError::Parse)?;
+                        self.insert_action(action)?;
+                    }
                 }
                 read.push(path);
             }
@@ -112,6 +126,18 @@ impl Registry {
         self.insert_message(srv.response.clone())?;
         self.insert_message(event_message(&srv))?;
         self.services.insert(srv.name.clone(), srv);
+        Ok(())
+    }
+
+    /// Add one parsed action and its goal, result and feedback as messages.
+    pub fn insert_action(&mut self, action: ActionSpec) -> Result<(), LoadError> {
+        if self.actions.contains_key(&action.name) {
+            return Err(LoadError::Duplicate(action.name.to_string()));
+        }
+        self.insert_message(action.goal.clone())?;
+        self.insert_message(action.result.clone())?;
+        self.insert_message(action.feedback.clone())?;
+        self.actions.insert(action.name.clone(), action);
         Ok(())
     }
 

@@ -244,6 +244,19 @@ pub struct ServiceSpec {
     pub response: MessageSpec,
 }
 
+/// An action: a `.action` file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActionSpec {
+    /// Full name, kind `action`.
+    pub name: TypeName,
+    /// `Name_Goal`.
+    pub goal: MessageSpec,
+    /// `Name_Result`.
+    pub result: MessageSpec,
+    /// `Name_Feedback`.
+    pub feedback: MessageSpec,
+}
+
 /// A parse error, with the file and line it refers to.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParseError {
@@ -270,6 +283,33 @@ pub fn parse_message(name: TypeName, text: &str) -> Result<MessageSpec, ParseErr
 
 /// Parse the text of a `.srv` file into its request and response halves.
 pub fn parse_service(name: TypeName, text: &str) -> Result<ServiceSpec, ParseError> {
+    let [request, response] = parse_parts(&name, text, "srv", ["Request", "Response"])?;
+    Ok(ServiceSpec {
+        name,
+        request,
+        response,
+    })
+}
+
+/// Parse the text of a `.action` file into its goal, result and feedback parts.
+pub fn parse_action(name: TypeName, text: &str) -> Result<ActionSpec, ParseError> {
+    let [goal, result, feedback] =
+        parse_parts(&name, text, "action", ["Goal", "Result", "Feedback"])?;
+    Ok(ActionSpec {
+        name,
+        goal,
+        result,
+        feedback,
+    })
+}
+
+/// The `---`-separated parts of a `.srv` or `.action` file, as messages `Name_<suffix>`.
+fn parse_parts<const N: usize>(
+    name: &TypeName,
+    text: &str,
+    kind: &str,
+    suffixes: [&str; N],
+) -> Result<[MessageSpec; N], ParseError> {
     let lines: Vec<&str> = text.split_inclusive('\n').collect();
     let separators: Vec<usize> = lines
         .iter()
@@ -277,28 +317,27 @@ pub fn parse_service(name: TypeName, text: &str) -> Result<ServiceSpec, ParseErr
         .filter(|(_, l)| l.trim() == "---")
         .map(|(i, _)| i)
         .collect();
-    if separators.len() != 1 {
+    if separators.len() != N - 1 {
         return Err(ParseError {
             file: name.to_string(),
-            line: separators.get(1).map_or(lines.len(), |i| i + 1),
+            line: separators.get(N - 1).map_or(lines.len(), |i| i + 1),
             message: format!(
-                "a .srv file needs exactly one `---` line between request and response, found {}",
+                "a .{kind} file needs exactly {} `---` line(s) between its parts ({}), found {}",
+                N - 1,
+                suffixes.join(", ").to_lowercase(),
                 separators.len()
             ),
         });
     }
-    let split = separators[0];
-    let request_text: String = lines[..split].concat();
-    let response_text: String = lines[split + 1..].concat();
-    let sub =
-        |suffix: &str| TypeName::new(&name.package, "srv", &format!("{}_{suffix}", name.name));
-    let request = parse_lines(sub("Request"), &request_text, 0)?;
-    let response = parse_lines(sub("Response"), &response_text, split + 1)?;
-    Ok(ServiceSpec {
-        name,
-        request,
-        response,
-    })
+    let mut parts = Vec::with_capacity(N);
+    let mut start = 0;
+    for (index, suffix) in suffixes.iter().enumerate() {
+        let end = separators.get(index).copied().unwrap_or(lines.len());
+        let part_name = TypeName::new(&name.package, kind, &format!("{}_{suffix}", name.name));
+        parts.push(parse_lines(part_name, &lines[start..end].concat(), start)?);
+        start = end + 1;
+    }
+    Ok(parts.try_into().expect("one part per suffix"))
 }
 
 fn parse_lines(name: TypeName, text: &str, line_offset: usize) -> Result<MessageSpec, ParseError> {

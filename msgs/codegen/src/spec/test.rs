@@ -86,7 +86,30 @@ fn service_halves() {
     assert_eq!(s.request.text, "int32 a\n");
     assert_eq!(s.response.fields.len(), 2);
     let err = parse_service(TypeName::new("pkg", "srv", "Do"), "int32 a\n").unwrap_err();
-    assert!(err.message.contains("exactly one `---`"));
+    assert!(err.message.contains("exactly 1 `---`"));
+}
+
+#[test]
+fn action_parts() {
+    let a = parse_action(
+        TypeName::new("pkg", "action", "Move"),
+        "float64 target\n---\nint32 code\n---\nfloat64 error\nfloat64 time\n",
+    )
+    .unwrap();
+    assert_eq!(a.goal.name.to_string(), "pkg/action/Move_Goal");
+    assert_eq!(a.result.name.to_string(), "pkg/action/Move_Result");
+    assert_eq!(a.feedback.name.to_string(), "pkg/action/Move_Feedback");
+    assert_eq!(a.feedback.fields.len(), 2);
+    assert_eq!(a.result.text, "int32 code\n");
+    let err = parse_action(TypeName::new("pkg", "action", "Move"), "a\n---\nb\n").unwrap_err();
+    assert!(err.message.contains("exactly 2 `---`"), "{err}");
+    // Errors in later parts name their line in the whole file.
+    let err = parse_action(
+        TypeName::new("pkg", "action", "Move"),
+        "float64 a\n---\nint32 b\n---\nbad-type c\n",
+    )
+    .unwrap_err();
+    assert_eq!(err.line, 5, "{err}");
 }
 
 #[test]
