@@ -50,7 +50,7 @@ def own_interface_files() -> tuple[dict[str, str], dict[str, str]]:
 
 def rosbags_store():
     """The Jazzy type store of `rosbags`, plus our package registered from our own files, plus
-    control_msgs/GripperCommand (not in rosbags' Jazzy store) from msgs/standard."""
+    control_msgs/GripperCommand (not in rosbags' Jazzy store) from msgs/ros2_control."""
     from rosbags.interfaces import Nodetype
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -59,7 +59,7 @@ def rosbags_store():
     msgs, srvs = own_interface_files()
     for name, text in msgs.items():
         types.update(get_types_from_msg(text, name))
-    gripper = MSGS / "standard/control_msgs/msg/GripperCommand.msg"
+    gripper = MSGS / "ros2_control/control_msgs/msg/GripperCommand.msg"
     types.update(get_types_from_msg(gripper.read_text(), "control_msgs/msg/GripperCommand"))
     for name, text in srvs.items():
         request, response = text.split("\n---\n")
