@@ -41,42 +41,56 @@ def probe_lines(*args: str, stdin: str | None = None) -> list[dict]:
     return [json.loads(line) for line in probe(*args, stdin=stdin).splitlines() if line.strip()]
 
 
+def interface_files(package: str, folder: Path) -> tuple[dict[str, str], dict[str, str], dict[str, str]]:
+    """The .msg, .srv and .action texts of one package folder, by type name."""
+    def texts(kind: str) -> dict[str, str]:
+        return {f"{package}/{kind}/{p.stem}": p.read_text() for p in sorted((folder / kind).glob(f"*.{kind}"))}
+    return texts("msg"), texts("srv"), texts("action")
+
+
 def own_interface_files() -> tuple[dict[str, str], dict[str, str]]:
     """composuite_msgs .msg and .srv texts by type name."""
-    msgs = {f"composuite_msgs/msg/{p.stem}": p.read_text() for p in sorted((MSGS / "msg").glob("*.msg"))}
-    srvs = {f"composuite_msgs/srv/{p.stem}": p.read_text() for p in sorted((MSGS / "srv").glob("*.srv"))}
+    msgs, srvs, _ = interface_files("composuite_msgs", MSGS)
     return msgs, srvs
 
 
 def rosbags_store():
-    """The Jazzy type store of `rosbags`, plus our package registered from our own files, plus
-    control_msgs/GripperCommand (not in rosbags' Jazzy store) from msgs/ros2_control."""
+    """The Jazzy type store of `rosbags`, plus our package and the ros2_control subsets
+    (msgs/ros2_control/: control_msgs and controller_manager_msgs are not in rosbags' Jazzy
+    store) registered from our own files."""
     from rosbags.interfaces import Nodetype
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     store = get_typestore(Stores.ROS2_JAZZY)
     types: dict = {}
-    msgs, srvs = own_interface_files()
-    for name, text in msgs.items():
-        types.update(get_types_from_msg(text, name))
-    gripper = MSGS / "ros2_control/control_msgs/msg/GripperCommand.msg"
-    types.update(get_types_from_msg(gripper.read_text(), "control_msgs/msg/GripperCommand"))
-    for name, text in srvs.items():
-        request, response = text.split("\n---\n")
-        for half, half_text in (("Request", request), ("Response", response)):
-            # rosbags resolves relative names against a msg-style name; parse as msg, then rename.
-            parsed = get_types_from_msg(half_text, f"{name.replace('/srv/', '/msg/')}_{half}")
+
+    def parts(name: str, text: str, suffixes: tuple[str, ...]) -> None:
+        # rosbags resolves relative names against a msg-style name; parse as msg, then rename.
+        kind = name.split("/")[1]
+        for suffix, part_text in zip(suffixes, text.split("\n---\n"), strict=True):
+            parsed = get_types_from_msg(part_text, f"{name.replace(f'/{kind}/', '/msg/')}_{suffix}")
             (_, definition), = parsed.items()
-            types[f"{name}_{half}"] = definition
-        # The event message of a service, as ROS 2 defines it.
-        types[f"{name}_Event"] = (
-            [],
-            [
-                ("info", (Nodetype.NAME, "service_msgs/msg/ServiceEventInfo")),
-                ("request", (Nodetype.SEQUENCE, ((Nodetype.NAME, f"{name}_Request"), 1))),
-                ("response", (Nodetype.SEQUENCE, ((Nodetype.NAME, f"{name}_Response"), 1))),
-            ],
-        )
+            types[f"{name}_{suffix}"] = definition
+
+    folders = [("composuite_msgs", MSGS)] + [(p.name, p) for p in sorted((MSGS / "ros2_control").iterdir())
+                                             if (p / "package.xml").is_file()]
+    for package, folder in folders:
+        msgs, srvs, actions = interface_files(package, folder)
+        for name, text in msgs.items():
+            types.update(get_types_from_msg(text, name))
+        for name, text in srvs.items():
+            parts(name, text, ("Request", "Response"))
+            # The event message of a service, as ROS 2 defines it.
+            types[f"{name}_Event"] = (
+                [],
+                [
+                    ("info", (Nodetype.NAME, "service_msgs/msg/ServiceEventInfo")),
+                    ("request", (Nodetype.SEQUENCE, ((Nodetype.NAME, f"{name}_Request"), 1))),
+                    ("response", (Nodetype.SEQUENCE, ((Nodetype.NAME, f"{name}_Response"), 1))),
+                ],
+            )
+        for name, text in actions.items():
+            parts(name, text, ("Goal", "Result", "Feedback"))
     store.register(types)
     return store
 
