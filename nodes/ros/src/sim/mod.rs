@@ -18,6 +18,9 @@
 //! Sim time never goes backwards: it advances one control period per step, and one per reset,
 //! so every stamp is unique within a run.
 
+pub mod controllers;
+pub mod hardware;
+
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 

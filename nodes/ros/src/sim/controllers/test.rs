@@ -1,0 +1,284 @@
+//! The controllers on the mock hardware: no physics, every command followed exactly.
+
+use composuite_core::axes::Robot;
+use composuite_core::physics::{ARM_DOF, RobotModel, robot_model};
+
+use super::trajectory::{
+    Following, JointTolerance, Outcome, Tolerances, TrajectoryRequest, Waypoint, code,
+    resolve_tolerances, validate,
+};
+use crate::sim::hardware::{ArmCommand, Command, Hardware, JOINTS, MockHardware};
+
+const PERIOD_NS: u64 = 50_000_000;
+
+fn panda() -> &'static RobotModel {
+    robot_model(Robot::Panda)
+}
+
+fn names(model: &RobotModel) -> Vec<String> {
+    model.joints[..ARM_DOF]
+        .iter()
+        .map(|j| j.name.clone())
+        .collect()
+}
+
+/// A start pose inside every Panda joint's limits.
+fn home() -> [f64; JOINTS] {
+    [0.0, 0.2, 0.0, -2.0, 0.0, 2.2, 0.8, 0.02]
+}
+
+fn waypoints(targets: &[[f64; ARM_DOF]]) -> Vec<Waypoint> {
+    targets
+        .iter()
+        .enumerate()
+        .map(|(i, t)| Waypoint {
+            time_from_start_ns: (i as i64 + 1) * PERIOD_NS as i64,
+            positions: t.to_vec(),
+            ..Waypoint::default()
+        })
+        .collect()
+}
+
+fn request(model: &RobotModel, targets: &[[f64; ARM_DOF]]) -> TrajectoryRequest {
+    TrajectoryRequest {
+        joint_names: names(model),
+        points: waypoints(targets),
+        ..TrajectoryRequest::default()
+    }
+}
+
+/// Run read → update → write until the outcome is decided (at most `limit` updates); the
+/// commands written and the final outcome.
+fn run(hardware: &mut MockHardware, following: &mut Following, limit: usize) -> Outcome {
+    for _ in 0..limit {
+        let state = hardware.read();
+        let update = following.update(&state, PERIOD_NS);
+        if update.outcome != Outcome::Running {
+            return update.outcome;
+        }
+        let targets = update.command.expect("running: a command");
+        hardware
+            .write(&Command {
+                arm: ArmCommand::Positions(targets),
+                gripper: None,
+            })
+            .unwrap();
+    }
+    Outcome::Running
+}
+
+#[test]
+fn waypoints_one_period_apart_are_commanded_exactly_then_the_goal_succeeds() {
+    let model = panda();
+    let start = home();
+    let targets: Vec<[f64; ARM_DOF]> = (1..=4)
+        .map(|k| std::array::from_fn(|j| start[j] + 0.01 * k as f64 * (j as f64 + 1.0) / 3.0))
+        .collect();
+    let trajectory = validate(&request(model, &targets), model, 0).unwrap();
+    let mut following = Following::new(trajectory, Tolerances::default());
+    let mut hardware = MockHardware::new(model, start, PERIOD_NS);
+    assert_eq!(run(&mut hardware, &mut following, 20), Outcome::Succeeded);
+    // One write per waypoint, each the waypoint itself, bit for bit (what joint_command sends).
+    let written: Vec<[f64; ARM_DOF]> = hardware
+        .written
+        .iter()
+        .map(|c| match c.arm {
+            ArmCommand::Positions(p) => p,
+            ArmCommand::Reference(_) => panic!("positions only"),
+        })
+        .collect();
+    let bits = |v: &[[f64; ARM_DOF]]| -> Vec<Vec<u64>> {
+        v.iter()
+            .map(|p| p.iter().map(|x| x.to_bits()).collect())
+            .collect()
+    };
+    assert_eq!(bits(&written), bits(&targets));
+}
+
+#[test]
+fn between_waypoints_the_command_is_interpolated_and_joint_order_follows_the_names() {
+    let model = panda();
+    let start = home();
+    let mut goal = start;
+    goal[3] += 0.4;
+    // Names reversed: values must land on the right joints.
+    let mut reversed = names(model);
+    reversed.reverse();
+    let mut positions: Vec<f64> = goal[..ARM_DOF].to_vec();
+    positions.reverse();
+    let request = TrajectoryRequest {
+        joint_names: reversed,
+        points: vec![Waypoint {
+            time_from_start_ns: 4 * PERIOD_NS as i64,
+            positions,
+            ..Waypoint::default()
+        }],
+        ..TrajectoryRequest::default()
+    };
+    let mut following =
+        Following::new(validate(&request, model, 0).unwrap(), Tolerances::default());
+    let mut hardware = MockHardware::new(model, start, PERIOD_NS);
+    assert_eq!(run(&mut hardware, &mut following, 20), Outcome::Succeeded);
+    let first = match hardware.written[0].arm {
+        ArmCommand::Positions(p) => p,
+        ArmCommand::Reference(_) => unreachable!(),
+    };
+    // Linear from the start state: a quarter of the way after one period of four.
+    assert!((first[3] - (start[3] + 0.1)).abs() < 1e-12, "{first:?}");
+    assert_eq!(first[0], start[0]);
+    assert_eq!(hardware.written.len(), 4);
+    assert_eq!(hardware.read().positions[3], goal[3]);
+}
+
+#[test]
+fn invalid_goals_are_refused_with_the_reason() {
+    let model = panda();
+    let ok = request(model, &[[0.0, 0.2, 0.0, -2.0, 0.0, 2.2, 0.8]]);
+    assert!(validate(&ok, model, 0).is_ok());
+    let refused = |change: &dyn Fn(&mut TrajectoryRequest), want: &str| {
+        let mut bad = ok.clone();
+        change(&mut bad);
+        let err = validate(&bad, model, 10 * PERIOD_NS).unwrap_err();
+        assert!(err.contains(want), "`{err}` lacks `{want}`");
+    };
+    refused(
+        &|r| r.joint_names[2] = "elbow".into(),
+        "Incoming joint elbow",
+    );
+    refused(
+        &|r| r.joint_names.pop().map(|_| ()).unwrap(),
+        "don't match the controller joints",
+    );
+    refused(
+        &|r| r.joint_names[1] = r.joint_names[0].clone(),
+        "named twice",
+    );
+    refused(&|r| r.points.clear(), "Empty trajectory");
+    refused(
+        &|r| r.points.push(r.points[0].clone()),
+        "not strictly increasing",
+    );
+    refused(
+        &|r| r.points[0].positions.pop().map(|_| ()).unwrap(),
+        "Mismatch",
+    );
+    refused(
+        &|r| r.points[0].velocities = vec![0.1; ARM_DOF],
+        "is not zero",
+    );
+    refused(&|r| r.points[0].effort = vec![1.0; ARM_DOF], "effort");
+    refused(&|r| r.points[0].positions[3] = 1.0, "outside its limits");
+    refused(&|r| r.points[0].positions[0] = f64::NAN, "non-finite");
+    refused(&|r| r.start_ns = PERIOD_NS, "ends in the past");
+}
+
+#[test]
+fn path_tolerance_violation_aborts_and_stops_commanding() {
+    let model = panda();
+    let start = home();
+    let mut goal = request(model, &[std::array::from_fn(|j| start[j])]);
+    goal.points[0].positions[0] += 0.5;
+    goal.points[0].time_from_start_ns = 4 * PERIOD_NS as i64;
+    let mut following = Following::new(
+        validate(&goal, model, 0).unwrap(),
+        Tolerances {
+            path: [0.05; ARM_DOF],
+            ..Tolerances::default()
+        },
+    );
+    // A stuck arm: halfway through, 0.25 rad behind the desired position.
+    let mut state = MockHardware::new(model, start, PERIOD_NS).read();
+    assert_eq!(
+        following.update(&state, PERIOD_NS).outcome,
+        Outcome::Running
+    );
+    state.time_ns = 2 * PERIOD_NS;
+    let update = following.update(&state, PERIOD_NS);
+    match update.outcome {
+        Outcome::Aborted { code: c, message } => {
+            assert_eq!(c, code::PATH_TOLERANCE_VIOLATED);
+            assert!(message.contains("path tolerance"), "{message}");
+        }
+        other => panic!("expected an abort, got {other:?}"),
+    }
+    assert_eq!(update.command, None);
+}
+
+#[test]
+fn goal_tolerance_waits_for_the_goal_time_then_aborts() {
+    let model = panda();
+    let start = home();
+    let mut goal = start;
+    goal[1] += 0.2;
+    let tolerances = Tolerances {
+        goal: [1e-3; ARM_DOF],
+        goal_time: 0.12,
+        ..Tolerances::default()
+    };
+    let mut following = Following::new(
+        validate(
+            &request(model, &[std::array::from_fn(|j| goal[j])]),
+            model,
+            0,
+        )
+        .unwrap(),
+        tolerances,
+    );
+    // A stuck arm: reads never change, so the goal tolerance is never met.
+    let mut state = MockHardware::new(model, start, PERIOD_NS).read();
+    let mut outcomes = Vec::new();
+    for k in 0..6 {
+        state.time_ns = k * PERIOD_NS;
+        outcomes.push(following.update(&state, PERIOD_NS).outcome);
+    }
+    // End at 1 period; 0.12 s later (after the update at 3.4 periods) it aborts: update 4.
+    assert!(
+        outcomes[..4].iter().all(|o| *o == Outcome::Running),
+        "{outcomes:?}"
+    );
+    assert!(matches!(
+        &outcomes[4],
+        Outcome::Aborted { code: c, .. } if *c == code::GOAL_TOLERANCE_VIOLATED
+    ));
+}
+
+#[test]
+fn goal_tolerances_resolve_as_the_controller_does() {
+    let model = panda();
+    let names = names(model);
+    let defaults = Tolerances {
+        path: [0.1; ARM_DOF],
+        goal: [0.01; ARM_DOF],
+        goal_time: 0.5,
+    };
+    let entry = |name: &str, position: f64| JointTolerance {
+        name: name.into(),
+        position,
+        velocity: 0.0,
+        acceleration: 0.0,
+    };
+    let mut goal = TrajectoryRequest {
+        path_tolerance: vec![
+            entry(&names[0], 0.3),
+            entry(&names[1], -1.0),
+            entry(&names[2], 0.0),
+        ],
+        goal_tolerance: vec![entry(&names[6], 0.002)],
+        goal_time_tolerance_ns: 2_000_000_000,
+        ..TrajectoryRequest::default()
+    };
+    let (resolved, warning) = resolve_tolerances(&goal, &defaults, model);
+    assert_eq!(warning, None);
+    assert_eq!(&resolved.path[..3], &[0.3, 0.0, 0.1]);
+    assert_eq!(resolved.goal[6], 0.002);
+    assert_eq!(resolved.goal[0], 0.01);
+    assert_eq!(resolved.goal_time, 2.0);
+    // Any invalid entry: every tolerance falls back to the defaults.
+    goal.goal_tolerance.push(entry("wrist", 0.1));
+    let (resolved, warning) = resolve_tolerances(&goal, &defaults, model);
+    assert_eq!(resolved, defaults);
+    assert!(warning.unwrap().contains("unknown joint `wrist`"));
+    goal.goal_tolerance.pop();
+    goal.path_tolerance.push(entry(&names[3], -2.0));
+    assert!(resolve_tolerances(&goal, &defaults, model).1.is_some());
+}
