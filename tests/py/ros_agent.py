@@ -91,11 +91,13 @@ def field_defaults(text: str) -> dict[str, Any]:
 
 
 def interface_texts() -> dict[str, str]:
-    """The definition text of every type by ROS name: the standard messages in msgs/standard,
-    composuite_msgs' msg/, and each half of its srv/ files as `pkg/srv/Name_Request`/`_Response`."""
+    """The definition text of every type by ROS name: the standard messages in msgs/standard and
+    msgs/ros2_control, composuite_msgs' msg/, and each half of its srv/ files as
+    `pkg/srv/Name_Request`/`_Response`."""
     texts = {}
-    for path in sorted((msgcheck.MSGS / "standard").glob("*/msg/*.msg")):
-        texts[f"{path.parent.parent.name}/msg/{path.stem}"] = path.read_text()
+    for folder in ("standard", "ros2_control"):
+        for path in sorted((msgcheck.MSGS / folder).glob("*/msg/*.msg")):
+            texts[f"{path.parent.parent.name}/msg/{path.stem}"] = path.read_text()
     msgs, srvs = msgcheck.own_interface_files()
     texts.update(msgs)
     for name, text in srvs.items():
