@@ -131,6 +131,27 @@ fn between_waypoints_the_command_is_interpolated_and_joint_order_follows_the_nam
 }
 
 #[test]
+fn a_first_waypoint_at_time_zero_is_the_desired_state_at_once() {
+    // As joint_trajectory_controller samples: at a waypoint's own time, the waypoint (not the
+    // state the trajectory was picked up from, even when both are at the same instant).
+    let model = panda();
+    let start = home();
+    let mut targets = [[0.0; ARM_DOF]; 2];
+    for (k, target) in targets.iter_mut().enumerate() {
+        *target = std::array::from_fn(|j| start[j] + 0.05 * (k as f64 + 1.0));
+    }
+    let mut goal = request(model, &targets);
+    goal.points[0].time_from_start_ns = 0;
+    let mut following = Following::new(validate(&goal, model, 0).unwrap(), Tolerances::default());
+    let update = following.update(
+        &MockHardware::new(model, start, PERIOD_NS).read(),
+        PERIOD_NS,
+    );
+    let desired: Vec<f64> = update.desired.iter().map(|d| d.position).collect();
+    assert_eq!(desired, targets[0].to_vec());
+}
+
+#[test]
 fn invalid_goals_are_refused_with_the_reason() {
     let model = panda();
     let ok = request(model, &[[0.0, 0.2, 0.0, -2.0, 0.0, 2.2, 0.8]]);

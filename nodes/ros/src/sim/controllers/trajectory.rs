@@ -339,7 +339,7 @@ impl Following {
             for point in &self.trajectory.points {
                 let knot = point[j];
                 if t <= knot.time_ns {
-                    if t <= previous.time_ns {
+                    if t < previous.time_ns {
                         return interpolate(&previous, &previous, t);
                     }
                     return interpolate(&previous, &knot, t);
