@@ -48,6 +48,18 @@ def interface_files(package: str, folder: Path) -> tuple[dict[str, str], dict[st
     return texts("msg"), texts("srv"), texts("action")
 
 
+# The packages that are not composuite_msgs: standard ROS 2 messages (msgs/standard) and the
+# ros2_control subsets (msgs/ros2_control), one folder per package in each.
+OTHER_PACKAGE_FOLDERS = ("standard", "ros2_control")
+
+
+def other_message_files() -> dict[str, Path]:
+    """The .msg files of every package under OTHER_PACKAGE_FOLDERS, by type name."""
+    return {f"{p.parent.parent.name}/msg/{p.stem}": p
+            for folder in OTHER_PACKAGE_FOLDERS
+            for p in sorted((MSGS / folder).glob("*/msg/*.msg"))}
+
+
 def own_interface_files() -> tuple[dict[str, str], dict[str, str]]:
     """composuite_msgs .msg and .srv texts by type name."""
     msgs, srvs, _ = interface_files("composuite_msgs", MSGS)

@@ -94,10 +94,7 @@ def interface_texts() -> dict[str, str]:
     """The definition text of every type by ROS name: the standard messages in msgs/standard and
     msgs/ros2_control, composuite_msgs' msg/, and each half of its srv/ files as
     `pkg/srv/Name_Request`/`_Response`."""
-    texts = {}
-    for folder in ("standard", "ros2_control"):
-        for path in sorted((msgcheck.MSGS / folder).glob("*/msg/*.msg")):
-            texts[f"{path.parent.parent.name}/msg/{path.stem}"] = path.read_text()
+    texts = {name: path.read_text() for name, path in msgcheck.other_message_files().items()}
     msgs, srvs = msgcheck.own_interface_files()
     texts.update(msgs)
     for name, text in srvs.items():

@@ -69,9 +69,7 @@ def test_every_interface_file_has_a_type(types):
     expected = {f"composuite_msgs/msg/{p.stem}" for p in (msgcheck.MSGS / "msg").glob("*.msg")}
     for path in (msgcheck.MSGS / "srv").glob("*.srv"):
         expected |= {f"composuite_msgs/srv/{path.stem}_Request", f"composuite_msgs/srv/{path.stem}_Response"}
-    for folder in ("standard", "ros2_control"):
-        for path in (msgcheck.MSGS / folder).glob("*/msg/*.msg"):
-            expected.add(f"{path.parent.parent.name}/msg/{path.stem}")
+    expected |= set(msgcheck.other_message_files())
     assert set(types) == expected
 
 

@@ -68,8 +68,7 @@ impl Registry {
     pub fn load_package(&mut self, package: &str, dir: &Path) -> Result<Vec<PathBuf>, LoadError> {
         let mut read = Vec::new();
         for kind in ["msg", "srv", "action"] {
-            let extension = kind;
-            for path in sorted_files(&dir.join(kind), extension)? {
+            for path in sorted_files(&dir.join(kind), kind)? {
                 let text =
                     std::fs::read_to_string(&path).map_err(|e| LoadError::Io(path.clone(), e))?;
                 let stem = path
@@ -78,29 +77,20 @@ impl Registry {
                     .unwrap_or_default()
                     .to_string();
                 let name = TypeName::new(package, kind, &stem);
-                let located = |e: ParseError| ParseError {
-                    file: path.display().to_string(),
-                    ..e
+                let located = |e: ParseError| {
+                    LoadError::Parse(ParseError {
+                        file: path.display().to_string(),
+                        ..e
+                    })
                 };
                 match kind {
                     "msg" => {
-                        let msg = spec::parse_message(name, &text)
-                            .map_err(located)
-                            .map_err(LoadError::Parse)?;
-                        self.insert_message(msg)?;
+                        self.insert_message(spec::parse_message(name, &text).map_err(located)?)?
                     }
                     "srv" => {
-                        let srv = spec::parse_service(name, &text)
-                            .map_err(located)
-                            .map_err(LoadError::Parse)?;
-                        self.insert_service(srv)?;
+                        self.insert_service(spec::parse_service(name, &text).map_err(located)?)?
                     }
-                    _ => {
-                        let action = spec::parse_action(name, &text)
-                            .map_err(located)
-                            .map_err(LoadError::Parse)?;
-                        self.insert_action(action)?;
-                    }
+                    _ => self.insert_action(spec::parse_action(name, &text).map_err(located)?)?,
                 }
                 read.push(path);
             }

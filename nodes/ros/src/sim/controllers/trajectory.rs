@@ -302,10 +302,18 @@ pub struct Update {
 pub struct Following {
     trajectory: Trajectory,
     tolerances: Tolerances,
-    /// Absolute start (ns), fixed at the first update.
-    start_ns: Option<u64>,
-    /// The state when the trajectory was picked up (absolute time), the first segment's start.
-    before: Option<(u64, [Knot; ARM_DOF])>,
+    /// Set at the first update: when the trajectory started and the state it was picked up in.
+    picked_up: Option<PickedUp>,
+}
+
+/// Where a followed trajectory begins.
+#[derive(Debug, Clone, Copy)]
+struct PickedUp {
+    /// Absolute start (ns): the request's, or the first update's time if it gave none.
+    start_ns: u64,
+    /// The joints' state at the first update, timed relative to the start: the first segment's
+    /// beginning.
+    state: [Knot; ARM_DOF],
 }
 
 impl Following {
@@ -314,67 +322,47 @@ impl Following {
         Following {
             trajectory,
             tolerances,
-            start_ns: None,
-            before: None,
+            picked_up: None,
         }
     }
 
-    /// The last point's positions (what the controller holds after the end).
-    pub fn final_positions(&self) -> [f64; ARM_DOF] {
-        let last = self.trajectory.points.last().expect("validated non-empty");
-        std::array::from_fn(|j| last[j].position)
-    }
-
-    /// The desired state of every joint at absolute time `t_ns`.
-    fn sample(&self, t_ns: u64) -> [JointSample; ARM_DOF] {
-        let start = self.start_ns.expect("sampled after the first update") as i128;
-        let (before_time, before) = self.before.expect("set at the first update");
-        let t = (t_ns as i128 - start) as i64;
-        let before_t = (before_time as i128 - start) as i64;
+    /// The desired state of every joint at `t_ns` after the start.
+    fn sample(&self, picked_up: &PickedUp, t_ns: i64) -> [JointSample; ARM_DOF] {
         std::array::from_fn(|j| {
-            let mut previous = Knot {
-                time_ns: before_t,
-                ..before[j]
-            };
+            let mut previous = picked_up.state[j];
             for point in &self.trajectory.points {
-                let knot = point[j];
-                if t <= knot.time_ns {
-                    if t < previous.time_ns {
-                        return interpolate(&previous, &previous, t);
-                    }
-                    return interpolate(&previous, &knot, t);
+                if t_ns <= point[j].time_ns {
+                    return interpolate(&previous, &point[j], t_ns);
                 }
-                previous = knot;
+                previous = point[j];
             }
-            interpolate(&previous, &previous, t)
+            interpolate(&previous, &previous, t_ns) // past the end: the last point, held
         })
     }
 
     /// One controller update at `state.time_ns`, commanding for the period `period_ns` ahead.
     pub fn update(&mut self, state: &JointSnapshot, period_ns: u64) -> Update {
         let now = state.time_ns;
-        let first_sample = self.start_ns.is_none();
-        if first_sample {
-            let start = if self.trajectory.start_ns == 0 {
-                now
-            } else {
-                self.trajectory.start_ns
+        let first_sample = self.picked_up.is_none();
+        let picked_up = *self.picked_up.get_or_insert_with(|| {
+            let start_ns = match self.trajectory.start_ns {
+                0 => now,
+                start => start,
             };
-            self.start_ns = Some(start);
-            self.before = Some((
-                now,
-                std::array::from_fn(|j| Knot {
-                    time_ns: 0,
+            let time_ns = (i128::from(now) - i128::from(start_ns)) as i64;
+            PickedUp {
+                start_ns,
+                state: std::array::from_fn(|j| Knot {
+                    time_ns,
                     position: state.positions[j],
                     velocity: Some(state.velocities[j]),
                     acceleration: Some(0.0),
                 }),
-            ));
-        }
-        let start = self.start_ns.expect("set above");
-        let desired = self.sample(now);
+            }
+        });
+        let time_from_start_ns = (i128::from(now) - i128::from(picked_up.start_ns)) as i64;
+        let desired = self.sample(&picked_up, time_from_start_ns);
         let last_time = self.trajectory.points.last().expect("validated")[0].time_ns;
-        let time_from_start_ns = (now as i128 - start as i128) as i64;
         let before_last_point = time_from_start_ns < last_time;
         let actual_positions: [f64; ARM_DOF] = std::array::from_fn(|j| state.positions[j]);
         let actual_velocities: [f64; ARM_DOF] = std::array::from_fn(|j| state.velocities[j]);
@@ -416,7 +404,7 @@ impl Following {
         let command = match outcome {
             Outcome::Aborted { .. } => None,
             _ => {
-                let next = self.sample(now + period_ns);
+                let next = self.sample(&picked_up, time_from_start_ns + period_ns as i64);
                 Some(std::array::from_fn(|j| next[j].position))
             }
         };
