@@ -745,6 +745,7 @@ impl SimWorld {
         };
         let colliders = &self.physics.colliders;
         let object = &colliders[object];
+        let object_pose = self.collider_pose(object);
         self.arm.finger_colliders.iter().any(|(handle, tag)| {
             let wanted = if pad_only {
                 *tag == ColliderTag::Pad(side)
@@ -756,7 +757,7 @@ impl SimWorld {
                 rapier3d::parry::query::intersection_test(
                     &self.collider_pose(finger),
                     finger.shape(),
-                    &self.collider_pose(object),
+                    &object_pose,
                     object.shape(),
                 )
                 .expect("parry tests boxes, capsules, cylinders and compounds of them")
