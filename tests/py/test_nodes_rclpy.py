@@ -21,17 +21,15 @@ import random
 import time
 
 import pytest
-import rclpy
-from rclpy.context import Context
 from composuite_msgs.msg import EpisodeStatus, Observation, StagedReward
 from composuite_msgs.srv import Reset, SetTask
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, ListParameters, SetParameters
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 import node_suite
+from rclpy_agent import RclpyAgent
 from node_suite import ns_of, env_replay_run, float_bits
 
 NS = "/rp"
@@ -74,53 +72,6 @@ def suite(tmp_path_factory, domain):
 def show_logs_on_failure(suite):
     yield
     print(suite.all_stderr())
-
-
-class RclpyAgent:
-    """An rclpy node with its own context and executor; everything waits by polling spin_once
-    until a wall-clock deadline."""
-
-    def __init__(self, domain: int):
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain)
-        self.node = Node("composuite_test_agent", context=self.context,
-                         start_parameter_services=False, enable_rosout=False)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-
-    def close(self) -> None:
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
-
-    def spin_until(self, condition, timeout: float = TIMEOUT, what: str = "a condition"):
-        deadline = time.monotonic() + timeout
-        while True:
-            value = condition()
-            if value:
-                return value
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-            self.executor.spin_once(timeout_sec=min(remaining, 0.05))
-
-    def call(self, client, request, timeout: float = TIMEOUT, attempt: float = 3.0):
-        """A service call: wait for the server, send, spin until the reply (no
-        spin_until_future_complete: its 7.1.6 slow-down with service futures). A reply sent
-        before the server's reply writer matched this client is lost (each side sees the
-        match on its own): after `attempt` s without one, ask again, until `timeout`."""
-        assert client.wait_for_service(timeout_sec=timeout), f"service {client.srv_name} not available"
-        deadline = time.monotonic() + timeout
-        while True:
-            future = client.call_async(request)
-            try:
-                self.spin_until(future.done, min(attempt, max(deadline - time.monotonic(), 0.01)),
-                                f"the reply of {client.srv_name}")
-                return future.result()
-            except AssertionError:
-                client.remove_pending_request(future)
-                if time.monotonic() >= deadline:
-                    raise
 
 
 @pytest.fixture(scope="module")

@@ -45,3 +45,19 @@ pub const EEF_FRAME: &str = "eef";
 pub const OBJECT_FRAME: &str = "object";
 /// `tf` frame of the goal marker.
 pub const GOAL_FRAME: &str = "goal";
+
+// ros2_control's controller interfaces, named as a driver's controllers name them (each under
+// its controller's name; `controller_manager` is the manager's node name).
+
+/// Action `control_msgs/action/FollowJointTrajectory` of the trajectory controller.
+pub const TRAJECTORY_ACTION: &str = "joint_trajectory_controller/follow_joint_trajectory";
+/// Topic `trajectory_msgs/JointTrajectory` of the trajectory controller (no result, no feedback).
+pub const TRAJECTORY_TOPIC: &str = "joint_trajectory_controller/joint_trajectory";
+/// Topic `std_msgs/Float64MultiArray` of the forward position controller (7 arm positions).
+pub const FORWARD_COMMANDS: &str = "forward_position_controller/commands";
+/// Action `control_msgs/action/GripperCommand` of the gripper controller (finger joint, m).
+pub const GRIPPER_ACTION: &str = "gripper_action_controller/gripper_cmd";
+/// Service `controller_manager_msgs/srv/ListControllers`.
+pub const LIST_CONTROLLERS: &str = "controller_manager/list_controllers";
+/// Service `controller_manager_msgs/srv/ListHardwareInterfaces`.
+pub const LIST_HARDWARE_INTERFACES: &str = "controller_manager/list_hardware_interfaces";

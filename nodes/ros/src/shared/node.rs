@@ -10,16 +10,17 @@ use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use composuite_msgs::{RosMessage, RosService};
+use ros2_client::action::ActionServerQosPolicies;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::dds::rustdds::Topic;
 use ros2_client::dds::{
-    Context, Node, NodeLoggingHandle, Publisher, Server, ServiceMapping, Subscription,
+    ActionServer, Context, Node, NodeLoggingHandle, Publisher, Server, ServiceMapping, Subscription,
 };
 use ros2_client::log::LogLevel;
 use ros2_client::rosout::RosoutRaw;
 use ros2_client::{
-    Message, MessageTypeName, Name, NodeName, NodeOptions, ParameterValue, QosProfile,
-    ServiceTypeName,
+    ActionTypeName, Message, MessageTypeName, Name, NodeName, NodeOptions, ParameterValue,
+    QosProfile, ServiceTypeName,
 };
 
 use crate::shared::dds_log;
@@ -472,6 +473,39 @@ impl RosNode {
                 qos,
             )
             .map_err(|e| StartError(format!("service {name}: {e:?}")))
+    }
+
+    /// A server of action `package/action/type_name` named `name` (remaps applied), with
+    /// rclcpp's action QoS: reliable services, feedback as a default topic, the status latched
+    /// (transient local, keep last 1). `G`, `R`, `F` are the action's goal, result and feedback.
+    pub fn action_server<G, R, F>(
+        &mut self,
+        name: &str,
+        package: &str,
+        type_name: &str,
+    ) -> Result<ActionServer<G, R, F>, StartError>
+    where
+        G: Message + Clone + 'static,
+        R: Message + Clone + 'static,
+        F: Message + 'static,
+    {
+        use crate::shared::qos;
+        let action_name = self.resolve_name(name)?;
+        let policies = ActionServerQosPolicies {
+            goal_service: qos::services(),
+            result_service: qos::services(),
+            cancel_service: qos::services(),
+            feedback_publisher: qos::state(),
+            status_publisher: qos::latched(),
+        };
+        self.node
+            .create_action_server(
+                self.service_mapping,
+                &action_name,
+                &ActionTypeName::new(package, type_name),
+                policies,
+            )
+            .map_err(|e| StartError(format!("action {name}: {e:?}")))
     }
 
     /// A client of service `S` named `name`, in this node's service wire format.

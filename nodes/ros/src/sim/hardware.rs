@@ -14,7 +14,7 @@
 //! `0.0371 + 2·position`).
 
 use composuite_core::env::{Action, Env, EnvError, Step};
-use composuite_core::physics::{ARM_DOF, RobotModel, pad_gap};
+use composuite_core::physics::{ARM_DOF, RobotModel, finger_for_gap, pad_gap};
 
 /// Joints with interfaces: the arm's seven, then the gripper's left finger.
 pub const JOINTS: usize = ARM_DOF + 1;
@@ -43,13 +43,26 @@ pub enum ArmCommand {
     Reference([f64; ARM_DOF + 1]),
 }
 
-/// A gripper position command with its effort limit.
+/// A gripper position command with its effort limit. It carries the pad opening, the unit the
+/// simulated gripper is commanded in (`gripper_command`, the finger joints of `joint_command`), so
+/// those paths reach the world bit for bit; a finger joint position converts with
+/// [`GripperTarget::finger`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GripperTarget {
-    /// Left finger joint position (m).
-    pub position: f64,
+    /// Distance between the finger pads (m): `0.0371 + 2·(left finger joint position)`.
+    pub opening: f64,
     /// Effort limit (N); 0 = the default.
     pub max_effort: f64,
+}
+
+impl GripperTarget {
+    /// The target that puts the left finger joint at `position` (m).
+    pub fn finger(position: f64, max_effort: f64) -> Self {
+        GripperTarget {
+            opening: pad_gap(position),
+            max_effort,
+        }
+    }
 }
 
 /// Everything written for one period.
@@ -97,25 +110,14 @@ impl Hardware for SimHardware<'_> {
     }
 
     fn read(&self) -> JointSnapshot {
-        let world = self.env.world();
-        let mut positions = [0.0; JOINTS];
-        let mut velocities = [0.0; JOINTS];
-        positions[..ARM_DOF].copy_from_slice(&world.arm_positions());
-        velocities[..ARM_DOF].copy_from_slice(&world.arm_velocities());
-        positions[GRIPPER] = world.joint_position(ARM_DOF);
-        velocities[GRIPPER] = world.joint_velocity(ARM_DOF);
-        JointSnapshot {
-            time_ns: self.time_ns,
-            positions,
-            velocities,
-        }
+        read_env(self.env, self.time_ns)
     }
 
     fn write(&mut self, command: &Command) -> Result<(), String> {
         let action = match command.arm {
             ArmCommand::Positions(joints) => Action::Absolute {
                 joints,
-                gripper: command.gripper.map(|g| (pad_gap(g.position), g.max_effort)),
+                gripper: command.gripper.map(|g| (g.opening, g.max_effort)),
             },
             ArmCommand::Reference(values) => Action::Reference(values),
         };
@@ -123,6 +125,22 @@ impl Hardware for SimHardware<'_> {
         let outcome = result.as_ref().map(|_| ()).map_err(|e| e.to_string());
         self.last_step = Some(result);
         outcome
+    }
+}
+
+/// The joints of `env`'s arm, read at sim time `time_ns` (what [`SimHardware::read`] gives).
+pub fn read_env(env: &Env, time_ns: u64) -> JointSnapshot {
+    let world = env.world();
+    let mut positions = [0.0; JOINTS];
+    let mut velocities = [0.0; JOINTS];
+    positions[..ARM_DOF].copy_from_slice(&world.arm_positions());
+    velocities[..ARM_DOF].copy_from_slice(&world.arm_velocities());
+    positions[GRIPPER] = world.joint_position(ARM_DOF);
+    velocities[GRIPPER] = world.joint_velocity(ARM_DOF);
+    JointSnapshot {
+        time_ns,
+        positions,
+        velocities,
     }
 }
 
@@ -175,7 +193,7 @@ impl Hardware for MockHardware {
             let (lower, upper) = self.model.joints[ARM_DOF]
                 .limits
                 .unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-            next[GRIPPER] = gripper.position.clamp(lower, upper);
+            next[GRIPPER] = finger_for_gap(gripper.opening).clamp(lower, upper);
         }
         let period = self.period_ns as f64 * 1e-9;
         for (velocity, (new, old)) in self

@@ -8,9 +8,15 @@
 //!   `gripper_command` (opening, effort) set the targets; `reference_action` (8 values in
 //!   [−1, 1]) acts as the reference benchmark's agents do (joint deltas + gripper sign, its
 //!   soft controller), so a Gymnasium agent written for CompoSuite sees the same environment;
-//! - `lockstep` mode: each `joint_command` or `reference_action` advances exactly one control
-//!   period, and nothing else does; `realtime` mode: a wall-clock timer steps with the last
-//!   command held;
+//! - ros2_control's controllers ([`controllers`], chosen by the `controllers` parameter):
+//!   `joint_trajectory_controller/{follow_joint_trajectory,joint_trajectory}`,
+//!   `forward_position_controller/commands`, `gripper_action_controller/gripper_cmd`, and
+//!   `controller_manager/{list_controllers,list_hardware_interfaces}`;
+//! - every period runs read → update → write on one timestamp through the [`hardware`] seam;
+//! - `lockstep` mode: each `joint_command`, `reference_action` or forward command advances exactly
+//!   one control period; a trajectory or gripper goal (or topic trajectory) advances the sim
+//!   itself, one period per update, until it is decided; nothing else advances it. `realtime`
+//!   mode: a wall-clock timer steps with the last command held and running goals updated;
 //! - after every step (and at reset): `world_state` first (the reward node's input), then
 //!   `observation`, `joint_states`, `tf`, `clock`, all stamped with the new sim time; when the
 //!   robot changes, the latched `robot_description` and `tf_static` (world → the arm's root link).
@@ -18,28 +24,45 @@
 //! Sim time never goes backwards: it advances one control period per step, and one per reset,
 //! so every stamp is unique within a run.
 
+pub mod action_server;
 pub mod controllers;
 pub mod hardware;
+pub mod ros_control;
 
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 
 use composuite_core::TaskSpec;
-use composuite_core::env::{Action, Env, EnvConfig, EnvError};
-use composuite_core::physics::{ARM_DOF, robot_description, robot_model};
+use composuite_core::env::{Env, EnvConfig, EnvError};
+use composuite_core::physics::{ARM_DOF, RobotModel, robot_description, robot_model};
+use composuite_msgs::control_msgs::action::{
+    FollowJointTrajectoryFeedback, FollowJointTrajectoryGoal, FollowJointTrajectoryResult,
+    GripperCommandFeedback, GripperCommandGoal, GripperCommandResult,
+};
 use composuite_msgs::control_msgs::msg::GripperCommand;
+use composuite_msgs::controller_manager_msgs::srv::{ListControllers, ListHardwareInterfaces};
 use composuite_msgs::msg;
 use composuite_msgs::rosgraph_msgs::msg::Clock;
 use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::std_msgs::msg::{Float64MultiArray, String as StringMsg};
 use composuite_msgs::tf2_msgs::msg::TFMessage;
+use composuite_msgs::trajectory_msgs::msg::JointTrajectory;
+use futures::stream::FusedStream;
 use futures::{FutureExt, StreamExt};
-use ros2_client::dds::Publisher;
-use ros2_client::{Gid, ParameterValue};
+use ros2_client::action::{GoalId, GoalStatusEnum, SendGoalRequest};
+use ros2_client::action_msgs::CancelGoalRequest;
+use ros2_client::dds::{ActionServer, Publisher, Subscription};
+use ros2_client::{Gid, Message, ParameterValue, RmwRequestId};
 
+use self::action_server::Goals;
+use self::controllers::catalog::{self, Controller};
+use self::controllers::gripper::{GripperFollowing, GripperGoal, GripperParams};
+use self::controllers::running::{Controllers, End, Event};
+use self::controllers::{forward, trajectory};
+use self::hardware::{ArmCommand, GripperTarget, Hardware, JointSnapshot, SimHardware, read_env};
 use crate::shared::convert;
 use crate::shared::names;
-use crate::shared::node::{ParamChange, RosNode};
+use crate::shared::node::{Logger, ParamChange, RosNode};
 use crate::shared::params::{ParamSpec, any_value, positive_number};
 use crate::shared::qos;
 
@@ -50,12 +73,20 @@ fn check_mode(v: &ParameterValue) -> Result<(), String> {
     }
 }
 
+fn check_controllers(v: &ParameterValue) -> Result<(), String> {
+    match v {
+        ParameterValue::StringArray(names) => catalog::parse_list(names).map(|_| ()),
+        _ => Err("a list of controller names".into()),
+    }
+}
+
 /// The sim node's parameters.
 pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "mode",
         default: || ParameterValue::String("lockstep".into()),
-        description: "lockstep: one control period per joint_command; realtime: wall-clock pace",
+        description: "lockstep: one control period per command (goals advance the sim \
+                      themselves); realtime: wall-clock pace",
         check: check_mode,
     },
     ParamSpec {
@@ -70,12 +101,27 @@ pub const PARAMS: &[ParamSpec] = &[
         description: "include the task one-hots in observation.flat (93 values) or not (77)",
         check: any_value,
     },
+    ParamSpec {
+        name: "controllers",
+        default: || {
+            ParameterValue::StringArray(
+                catalog::OPTIONAL
+                    .iter()
+                    .map(|c| c.name().to_string())
+                    .collect(),
+            )
+        },
+        description: "ros2_control controllers to offer (read at start-up): \
+                      joint_trajectory_controller, forward_position_controller, \
+                      gripper_action_controller",
+        check: check_controllers,
+    },
 ];
 
 /// How the sim advances.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
-    /// One control period per `joint_command` or `reference_action`.
+    /// One control period per direct command; a running goal advances the sim itself.
     Lockstep,
     /// Wall-clock pace, last targets held.
     Realtime,
@@ -102,6 +148,20 @@ struct Publishers {
     robot_description: Publisher<StringMsg>,
 }
 
+type TrajectoryServer = ActionServer<
+    FollowJointTrajectoryGoal,
+    FollowJointTrajectoryResult,
+    FollowJointTrajectoryFeedback,
+>;
+type GripperServer = ActionServer<GripperCommandGoal, GripperCommandResult, GripperCommandFeedback>;
+
+/// The controllers' action servers (absent when the controller is not up). They stay outside
+/// [`Sim`]: the event loop's request streams borrow them while the handlers change the sim.
+struct ActionServers {
+    trajectory: Option<TrajectoryServer>,
+    gripper: Option<GripperServer>,
+}
+
 /// The episode being simulated.
 struct Running {
     env: Env,
@@ -110,25 +170,23 @@ struct Running {
     /// Who published that scene. A restarted task manager is another writer whose episode
     /// numbers start again at 1: its scenes are new even where a number repeats.
     scene_writer: Gid,
-    /// The arm command held between commands (realtime mode steps with it).
-    held: HeldCommand,
-    /// A gripper command waiting for the next step.
-    gripper: Option<(f64, f64)>,
+    /// What commands the arm and gripper.
+    controllers: Controllers<GoalId>,
     /// Joints already reported as clamped this episode (said once).
     clamp_reported: BTreeSet<String>,
     /// Whether "episode over" was already said for this episode.
     over_reported: bool,
 }
 
-/// The last arm command received, which the next step uses.
-#[derive(Debug, Clone, Copy)]
-enum HeldCommand {
-    /// Absolute joint targets (`joint_command`, or the pose at reset).
-    Targets([f64; ARM_DOF]),
-    /// The reference's normalised action (`reference_action`): held like a velocity command,
-    /// each step moves the goal from the joints' measured positions again.
-    Reference([f64; REFERENCE_ACTION_LEN]),
+impl Running {
+    fn model(&self) -> &'static RobotModel {
+        self.env.world().model
+    }
 }
+
+/// In lockstep, how long past its end a trajectory goal with goal tolerances and no goal time
+/// tolerance may take to meet them (s of sim time), so the goal always ends.
+const LOCKSTEP_GOAL_TIME_S: f64 = 1.0;
 
 /// Values in a `reference_action`: seven joint deltas and the gripper.
 const REFERENCE_ACTION_LEN: usize = ARM_DOF + 1;
@@ -145,6 +203,15 @@ struct StepTiming {
 /// Steps per timing log line.
 const TIMING_WINDOW: u32 = 1000;
 
+/// What advanced the sim by one period.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Advance {
+    /// A direct command (lockstep) or the realtime timer: the period is always simulated.
+    Command,
+    /// A running goal (lockstep): simulated only while a goal is still undecided after the update.
+    Goal,
+}
+
 struct Sim {
     timing: StepTiming,
     mode: Mode,
@@ -153,6 +220,30 @@ struct Sim {
     sim_time_ns: u64,
     run: Option<Running>,
     pubs: Publishers,
+    /// The optional controllers that are up.
+    up: Vec<Controller>,
+    trajectory_goals: Goals<FollowJointTrajectoryResult>,
+    gripper_goals: Goals<GripperCommandResult>,
+}
+
+/// A subscription's stream, or a stream that never yields when the topic is not offered.
+fn optional_stream<M: Message + 'static>(
+    subscription: Option<&Subscription<M>>,
+) -> impl FusedStream<Item = ros2_client::ReadResult<(M, ros2_client::MessageInfo)>> + '_ {
+    match subscription {
+        Some(s) => s.async_stream().left_stream(),
+        None => futures::stream::pending().right_stream(),
+    }
+}
+
+/// An action service's request stream, or one that never yields when the action is not offered.
+fn optional_requests<'a, Req: Message + 'static, Resp: Message + 'static>(
+    server: Option<&'a ros2_client::dds::Server<Req, Resp>>,
+) -> impl FusedStream<Item = ros2_client::ReadResult<(RmwRequestId, Req)>> + 'a {
+    match server {
+        Some(s) => s.receive_request_stream().left_stream(),
+        None => futures::stream::pending().right_stream(),
+    }
 }
 
 /// Run the sim node until SIGINT/SIGTERM.
@@ -189,6 +280,55 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let gripper_sub = node
         .subscription::<GripperCommand>(names::GRIPPER_COMMAND, qos::state())
         .map_err(e)?;
+    let up = match node.param("controllers") {
+        ParameterValue::StringArray(list) => catalog::parse_list(&list)?,
+        _ => Vec::new(),
+    };
+    let is_up = |c: Controller| up.contains(&c);
+    let trajectory_sub = if is_up(Controller::JointTrajectory) {
+        Some(
+            node.subscription::<JointTrajectory>(names::TRAJECTORY_TOPIC, qos::state())
+                .map_err(e)?,
+        )
+    } else {
+        None
+    };
+    let forward_sub = if is_up(Controller::ForwardPosition) {
+        Some(
+            node.subscription::<Float64MultiArray>(names::FORWARD_COMMANDS, qos::state())
+                .map_err(e)?,
+        )
+    } else {
+        None
+    };
+    let servers = ActionServers {
+        trajectory: if is_up(Controller::JointTrajectory) {
+            Some(
+                node.action_server(
+                    names::TRAJECTORY_ACTION,
+                    "control_msgs",
+                    "FollowJointTrajectory",
+                )
+                .map_err(e)?,
+            )
+        } else {
+            None
+        },
+        gripper: if is_up(Controller::GripperAction) {
+            Some(
+                node.action_server(names::GRIPPER_ACTION, "control_msgs", "GripperCommand")
+                    .map_err(e)?,
+            )
+        } else {
+            None
+        },
+    };
+    let list_controllers = node
+        .server::<ListControllers>(names::LIST_CONTROLLERS)
+        .map_err(e)?;
+    let list_interfaces = node
+        .server::<ListHardwareInterfaces>(names::LIST_HARDWARE_INTERFACES)
+        .map_err(e)?;
     let mut sim = Sim {
         mode: Mode::parse(&node.param_string("mode")).unwrap_or(Mode::Lockstep),
         realtime_factor: node.param_f64("realtime_factor"),
@@ -197,25 +337,68 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         run: None,
         pubs,
         timing: StepTiming::default(),
+        up,
+        trajectory_goals: Goals::default(),
+        gripper_goals: Goals::default(),
     };
     let log = node.log.clone();
     log.info(format!(
-        "{} up in {:?} mode; waiting for a scene on `{}`",
+        "{} up in {:?} mode with controllers [{}]; waiting for a scene on `{}`",
         node.fully_qualified_name(),
         sim.mode,
+        sim.up
+            .iter()
+            .map(|c| c.name())
+            .collect::<Vec<_>>()
+            .join(", "),
         names::SCENE
     ));
     let param_changes = node.param_changes.clone();
+    let servers = &servers;
     smol::block_on(async {
         let mut scenes = std::pin::pin!(scene_sub.async_stream());
         let mut commands = std::pin::pin!(command_sub.async_stream());
         let mut grippers = std::pin::pin!(gripper_sub.async_stream());
         let mut actions = std::pin::pin!(action_sub.async_stream());
+        let mut trajectories = std::pin::pin!(optional_stream(trajectory_sub.as_ref()));
+        let mut forwards = std::pin::pin!(optional_stream(forward_sub.as_ref()));
+        let trajectory_server = servers.trajectory.as_ref();
+        let gripper_server = servers.gripper.as_ref();
+        let mut trajectory_goals = std::pin::pin!(optional_requests(
+            trajectory_server.map(|s| s.goal_service())
+        ));
+        let mut trajectory_cancels = std::pin::pin!(optional_requests(
+            trajectory_server.map(|s| s.cancel_service())
+        ));
+        let mut trajectory_results = std::pin::pin!(optional_requests(
+            trajectory_server.map(|s| s.result_service())
+        ));
+        let mut gripper_goals =
+            std::pin::pin!(optional_requests(gripper_server.map(|s| s.goal_service())));
+        let mut gripper_cancels = std::pin::pin!(optional_requests(
+            gripper_server.map(|s| s.cancel_service())
+        ));
+        let mut gripper_results = std::pin::pin!(optional_requests(
+            gripper_server.map(|s| s.result_service())
+        ));
+        let mut controller_lists = std::pin::pin!(list_controllers.receive_request_stream());
+        let mut interface_lists = std::pin::pin!(list_interfaces.receive_request_stream());
         let mut ticker = sim.ticker();
         loop {
+            // In lockstep a running goal advances the sim, after every waiting event is handled.
+            let goal_wants_time = sim.mode == Mode::Lockstep
+                && sim.run.as_ref().is_some_and(|r| r.controllers.running());
+            let goal_step = async {
+                if goal_wants_time {
+                    smol::future::yield_now().await
+                } else {
+                    futures::future::pending().await
+                }
+            };
             futures::select_biased! {
                 signal = signals.recv().fuse() => {
                     log.info(format!("signal {} received, shutting down", signal.unwrap_or(0)));
+                    sim.end_all_goals(servers, "the sim is shutting down", &log);
                     return Ok(());
                 }
                 change = param_changes.recv().fuse() => {
@@ -226,24 +409,91 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                 }
                 scene = scenes.select_next_some() => match scene {
                     Ok((scene, info)) => {
-                        sim.on_scene(&scene, info.publisher_gid(), &log);
+                        sim.on_scene(servers, &scene, info.publisher_gid(), &log);
                         ticker = sim.ticker();
                     }
                     Err(err) => log.warn(format!("unreadable scene message dropped: {err:?}")),
                 },
+                request = controller_lists.select_next_some() => match request {
+                    Ok((id, _)) => {
+                        let reply = ros_control::list_controllers(
+                            &sim.up, sim.model(), sim.update_rate_hz());
+                        if let Err(err) = list_controllers.send_response(id, reply) {
+                            log.warn(format!("list_controllers reply not sent: {err:?}"));
+                        }
+                    }
+                    Err(err) => log.warn(format!("unreadable list_controllers request: {err:?}")),
+                },
+                request = interface_lists.select_next_some() => match request {
+                    Ok((id, _)) => {
+                        let reply = ros_control::list_hardware_interfaces(&sim.up, sim.model());
+                        if let Err(err) = list_interfaces.send_response(id, reply) {
+                            log.warn(format!("list_hardware_interfaces reply not sent: {err:?}"));
+                        }
+                    }
+                    Err(err) => log.warn(format!(
+                        "unreadable list_hardware_interfaces request: {err:?}")),
+                },
+                request = trajectory_cancels.select_next_some() => match request {
+                    Ok((id, request)) => sim.on_trajectory_cancel(servers, id, &request, &log),
+                    Err(err) => log.warn(format!("unreadable cancel request: {err:?}")),
+                },
+                request = gripper_cancels.select_next_some() => match request {
+                    Ok((id, request)) => sim.on_gripper_cancel(servers, id, &request, &log),
+                    Err(err) => log.warn(format!("unreadable cancel request: {err:?}")),
+                },
+                request = trajectory_results.select_next_some() => match request {
+                    Ok((id, request)) => {
+                        let server = trajectory_server.expect("a request came: the server is up");
+                        if let Err(err) =
+                            sim.trajectory_goals.result_request(server, id, request.goal_id)
+                        {
+                            log.warn(err);
+                        }
+                    }
+                    Err(err) => log.warn(format!("unreadable result request: {err:?}")),
+                },
+                request = gripper_results.select_next_some() => match request {
+                    Ok((id, request)) => {
+                        let server = gripper_server.expect("a request came: the server is up");
+                        if let Err(err) =
+                            sim.gripper_goals.result_request(server, id, request.goal_id)
+                        {
+                            log.warn(err);
+                        }
+                    }
+                    Err(err) => log.warn(format!("unreadable result request: {err:?}")),
+                },
+                request = trajectory_goals.select_next_some() => match request {
+                    Ok((id, request)) => sim.on_trajectory_goal(servers, id, request, &log),
+                    Err(err) => log.warn(format!("unreadable trajectory goal: {err:?}")),
+                },
+                request = gripper_goals.select_next_some() => match request {
+                    Ok((id, request)) => sim.on_gripper_goal(servers, id, request, &log),
+                    Err(err) => log.warn(format!("unreadable gripper goal: {err:?}")),
+                },
+                trajectory = trajectories.select_next_some() => match trajectory {
+                    Ok((trajectory, _)) => sim.on_trajectory_topic(servers, &trajectory, &log),
+                    Err(err) => log.warn(format!("unreadable joint_trajectory dropped: {err:?}")),
+                },
                 gripper = grippers.select_next_some() => match gripper {
-                    Ok((command, _)) => sim.on_gripper(&command, &log),
+                    Ok((command, _)) => sim.on_gripper(servers, &command, &log),
                     Err(err) => log.warn(format!("unreadable gripper_command dropped: {err:?}")),
                 },
                 command = commands.select_next_some() => match command {
-                    Ok((command, _)) => sim.on_joint_command(&command, &log),
+                    Ok((command, _)) => sim.on_joint_command(servers, &command, &log),
                     Err(err) => log.warn(format!("unreadable joint_command dropped: {err:?}")),
                 },
+                command = forwards.select_next_some() => match command {
+                    Ok((command, _)) => sim.on_forward_command(servers, &command, &log),
+                    Err(err) => log.warn(format!("unreadable forward command dropped: {err:?}")),
+                },
                 action = actions.select_next_some() => match action {
-                    Ok((action, _)) => sim.on_reference_action(&action, &log),
+                    Ok((action, _)) => sim.on_reference_action(servers, &action, &log),
                     Err(err) => log.warn(format!("unreadable reference_action dropped: {err:?}")),
                 },
-                _ = ticker.next().fuse() => sim.step(&log),
+                _ = ticker.next().fuse() => sim.advance(servers, Advance::Command, &log),
+                _ = goal_step.fuse() => sim.advance(servers, Advance::Goal, &log),
             }
         }
     })
@@ -262,7 +512,33 @@ impl Sim {
         }
     }
 
-    fn on_param(&mut self, change: &ParamChange, log: &crate::shared::node::Logger) {
+    /// The loaded robot (none before the first scene).
+    fn model(&self) -> Option<&'static RobotModel> {
+        self.run.as_ref().map(Running::model)
+    }
+
+    /// Control updates per second (the controllers' update rate).
+    fn update_rate_hz(&self) -> u16 {
+        let period = self
+            .run
+            .as_ref()
+            .map(|r| r.env.config().control_period())
+            .unwrap_or_else(|| EnvConfig::default().control_period());
+        (1.0 / period).round() as u16
+    }
+
+    fn period_ns(run: &Running) -> u64 {
+        (run.env.config().control_period() * 1e9).round() as u64
+    }
+
+    /// The joints now, at the current sim time.
+    fn snapshot(&self) -> Option<JointSnapshot> {
+        self.run
+            .as_ref()
+            .map(|run| read_env(&run.env, self.sim_time_ns))
+    }
+
+    fn on_param(&mut self, change: &ParamChange, log: &Logger) {
         match (change.name.as_str(), &change.value) {
             ("mode", ParameterValue::String(s)) => {
                 if let Some(mode) = Mode::parse(s) {
@@ -275,11 +551,14 @@ impl Sim {
                 self.task_observation = *b;
                 log.info("task_observation takes effect with the next scene");
             }
+            ("controllers", _) => {
+                log.warn("controllers takes effect when the sim starts again; unchanged now")
+            }
             _ => {}
         }
     }
 
-    fn on_scene(&mut self, scene: &msg::Scene, writer: Gid, log: &crate::shared::node::Logger) {
+    fn on_scene(&mut self, servers: &ActionServers, scene: &msg::Scene, writer: Gid, log: &Logger) {
         let task: TaskSpec = match convert::task_of(&scene.task) {
             Ok(task) => task,
             Err(err) => {
@@ -294,6 +573,7 @@ impl Sim {
         {
             return; // the latched scene again (e.g. a re-match); nothing new
         }
+        self.end_all_goals(servers, &format!("episode {} started", scene.episode), log);
         // The scene carries the latest sim time the task manager has seen: a sim started again
         // (after a crash) goes on from there instead of from 0, so time never runs backwards.
         self.sim_time_ns = self.sim_time_ns.max(convert::nanos_of(&scene.header.stamp));
@@ -318,13 +598,12 @@ impl Sim {
             log.error(format!("cannot start episode {}: {err}", scene.episode));
             return;
         }
-        let held = HeldCommand::Targets(env.world().arm_positions());
+        let controllers = Controllers::holding(env.world().arm_positions());
         self.run = Some(Running {
             env,
             episode: scene.episode,
             scene_writer: writer,
-            held,
-            gripper: None,
+            controllers,
             clamp_reported: BTreeSet::new(),
             over_reported: false,
         });
@@ -351,33 +630,59 @@ impl Sim {
         self.publish_state();
     }
 
-    fn on_gripper(&mut self, command: &GripperCommand, log: &crate::shared::node::Logger) {
-        let Some(run) = &mut self.run else {
-            log.warn(
-                "gripper_command ignored: no episode yet (the task manager publishes the scene)",
-            );
+    /// End every running goal with `why` (a new episode, shutting down), holding the arm still.
+    fn end_all_goals(&mut self, servers: &ActionServers, why: &str, log: &Logger) {
+        let Some(state) = self.snapshot() else { return };
+        let Some(run) = &mut self.run else { return };
+        let positions = run.env.world().arm_positions();
+        let events = run.controllers.abort_all(why, positions, &state);
+        self.report(servers, events, log);
+    }
+
+    /// The running episode, or `None` after saying why `what` is ignored.
+    fn episode_for(&mut self, what: &str, log: &Logger) -> Option<&mut Running> {
+        if self.run.is_none() {
+            log.warn(format!(
+                "{what} ignored: no episode yet (the task manager publishes the scene)"
+            ));
+        }
+        self.run.as_mut()
+    }
+
+    fn on_gripper(&mut self, servers: &ActionServers, command: &GripperCommand, log: &Logger) {
+        let Some(state) = self.snapshot() else {
+            self.episode_for("gripper_command", log);
             return;
         };
-        let model = robot_model(run.env.task().robot);
+        let Some(run) = self.episode_for("gripper_command", log) else {
+            return;
+        };
         // Checked now so a bad command is refused on arrival, not at the next step.
-        match composuite_core::control::validate_gripper_width(
-            model,
+        if let Err(err) = composuite_core::control::validate_gripper_width(
+            run.model(),
             command.position,
             command.max_effort,
         ) {
-            Ok(_) => run.gripper = Some((command.position, command.max_effort)),
-            Err(err) => log.warn(format!("gripper_command refused: {err}")),
+            log.warn(format!("gripper_command refused: {err}"));
+            return;
         }
+        let target = GripperTarget {
+            opening: command.position,
+            max_effort: command.max_effort,
+        };
+        let ended = run.controllers.command_gripper(target, &state);
+        self.report(servers, ended, log);
     }
 
-    fn on_joint_command(&mut self, command: &JointState, log: &crate::shared::node::Logger) {
-        let Some(run) = &mut self.run else {
-            log.warn(
-                "joint_command ignored: no episode yet (the task manager publishes the scene)",
-            );
+    fn on_joint_command(&mut self, servers: &ActionServers, command: &JointState, log: &Logger) {
+        let Some(state) = self.snapshot() else {
+            self.episode_for("joint_command", log);
             return;
         };
-        let model = robot_model(run.env.task().robot);
+        let Some(run) = self.episode_for("joint_command", log) else {
+            return;
+        };
+        let model = run.model();
         let (arm, finger_gap) = match convert::arm_command(model, command) {
             Ok(parsed) => parsed,
             Err(err) => {
@@ -400,24 +705,57 @@ impl Sim {
             log.warn(format!("joint_command refused: {err}"));
             return;
         }
-        run.held = HeldCommand::Targets(arm);
+        let mut ended: Vec<_> = run
+            .controllers
+            .command_arm(ArmCommand::Positions(arm), names::JOINT_COMMAND)
+            .into_iter()
+            .collect();
         if let Some(gap) = finger_gap {
-            run.gripper = Some((gap, 0.0));
+            let target = GripperTarget {
+                opening: gap,
+                max_effort: 0.0,
+            };
+            ended.extend(run.controllers.command_gripper(target, &state));
         }
+        self.report(servers, ended, log);
         if self.mode == Mode::Lockstep {
-            self.step(log);
+            self.advance(servers, Advance::Command, log);
+        }
+    }
+
+    fn on_forward_command(
+        &mut self,
+        servers: &ActionServers,
+        command: &Float64MultiArray,
+        log: &Logger,
+    ) {
+        let what = names::FORWARD_COMMANDS;
+        let Some(run) = self.episode_for(what, log) else {
+            return;
+        };
+        let targets = match forward::parse_command(run.model(), &command.data) {
+            Ok(targets) => targets,
+            Err(err) => {
+                log.warn(format!("{what} refused: {err}"));
+                return;
+            }
+        };
+        let ended = run
+            .controllers
+            .command_arm(ArmCommand::Positions(targets), what);
+        self.report(servers, ended, log);
+        if self.mode == Mode::Lockstep {
+            self.advance(servers, Advance::Command, log);
         }
     }
 
     fn on_reference_action(
         &mut self,
+        servers: &ActionServers,
         action: &Float64MultiArray,
-        log: &crate::shared::node::Logger,
+        log: &Logger,
     ) {
-        let Some(run) = &mut self.run else {
-            log.warn(
-                "reference_action ignored: no episode yet (the task manager publishes the scene)",
-            );
+        let Some(run) = self.episode_for("reference_action", log) else {
             return;
         };
         let values: [f64; REFERENCE_ACTION_LEN] = match action.data.as_slice().try_into() {
@@ -440,27 +778,320 @@ impl Sim {
             ));
             return;
         }
-        run.held = HeldCommand::Reference(values);
+        let ended = run
+            .controllers
+            .command_arm(ArmCommand::Reference(values), names::REFERENCE_ACTION);
+        self.report(servers, ended, log);
         if self.mode == Mode::Lockstep {
-            self.step(log);
+            self.advance(servers, Advance::Command, log);
         }
     }
 
-    /// One control period with the held targets.
-    fn step(&mut self, log: &crate::shared::node::Logger) {
-        let Some(run) = &mut self.run else { return };
-        let action = match run.held {
-            HeldCommand::Targets(joints) => Action::Absolute {
-                joints,
-                gripper: run.gripper.take(),
-            },
-            // The reference's action carries its own gripper command.
-            HeldCommand::Reference(values) => Action::Reference(values),
+    /// A trajectory checked as joint_trajectory_controller checks it, with the tolerances it
+    /// asks for, ready to follow; or why not.
+    fn trajectory_for(
+        &self,
+        request: &trajectory::TrajectoryRequest,
+        log: &Logger,
+    ) -> Result<trajectory::Following, String> {
+        let Some(run) = &self.run else {
+            return Err("no episode yet (the task manager publishes the scene)".into());
         };
+        if run.env.ended().is_some() {
+            return Err(format!(
+                "episode {} is over; a new episode (reset) lets the arm move again",
+                run.episode
+            ));
+        }
+        let model = run.model();
+        let checked = trajectory::validate(request, model, self.sim_time_ns)?;
+        let (mut tolerances, note) =
+            trajectory::resolve_tolerances(request, &trajectory::Tolerances::default(), model);
+        if let Some(note) = note {
+            log.warn(format!("trajectory goal: {note}"));
+        }
+        // A goal time tolerance of 0 waits for the goal tolerance forever; in lockstep the goal
+        // itself advances the sim, so "forever" would never hand control back.
+        if self.mode == Mode::Lockstep
+            && tolerances.goal_time == 0.0
+            && tolerances.goal.iter().any(|&t| t > 0.0)
+        {
+            tolerances.goal_time = LOCKSTEP_GOAL_TIME_S;
+            log.debug(format!(
+                "trajectory goal: goal_time_tolerance 0 (wait forever) is {LOCKSTEP_GOAL_TIME_S} s \
+                 of sim time in lockstep"
+            ));
+        }
+        Ok(trajectory::Following::new(checked, tolerances))
+    }
+
+    fn on_trajectory_goal(
+        &mut self,
+        servers: &ActionServers,
+        request_id: RmwRequestId,
+        request: SendGoalRequest<FollowJointTrajectoryGoal>,
+        log: &Logger,
+    ) {
+        let server = servers
+            .trajectory
+            .as_ref()
+            .expect("a goal came: the server is up");
+        let now = convert::time_from_nanos(self.sim_time_ns);
+        let following =
+            ros_control::goal_request(&request.goal).and_then(|r| self.trajectory_for(&r, log));
+        let following = match following {
+            Ok(following) => following,
+            Err(why) => {
+                // The goal response has no field for a reason: it goes to the log (/rosout).
+                log.warn(format!("{} goal rejected: {why}", names::TRAJECTORY_ACTION));
+                if let Err(err) =
+                    Goals::<FollowJointTrajectoryResult>::reject(server, request_id, &now)
+                {
+                    log.warn(err);
+                }
+                return;
+            }
+        };
+        if let Err(err) = self
+            .trajectory_goals
+            .accept(server, request_id, request.goal_id, &now)
+        {
+            log.warn(err);
+            return;
+        }
+        let run = self.run.as_mut().expect("checked by trajectory_for");
+        let ended = run
+            .controllers
+            .start_trajectory(following, Some(request.goal_id));
+        self.report(servers, ended, log);
+    }
+
+    fn on_trajectory_topic(
+        &mut self,
+        servers: &ActionServers,
+        message: &JointTrajectory,
+        log: &Logger,
+    ) {
+        let request = ros_control::topic_request(message);
+        match self.trajectory_for(&request, log) {
+            Ok(following) => {
+                let run = self.run.as_mut().expect("checked by trajectory_for");
+                let ended = run.controllers.start_trajectory(following, None);
+                self.report(servers, ended, log);
+            }
+            Err(why) => log.warn(format!("{} refused: {why}", names::TRAJECTORY_TOPIC)),
+        }
+    }
+
+    fn on_gripper_goal(
+        &mut self,
+        servers: &ActionServers,
+        request_id: RmwRequestId,
+        request: SendGoalRequest<GripperCommandGoal>,
+        log: &Logger,
+    ) {
+        let server = servers
+            .gripper
+            .as_ref()
+            .expect("a goal came: the server is up");
+        let now = convert::time_from_nanos(self.sim_time_ns);
+        let command = &request.goal.command;
+        let goal = GripperGoal {
+            position: command.position,
+            max_effort: command.max_effort,
+        };
+        let checked = match (&self.run, self.snapshot()) {
+            (Some(run), Some(state)) if run.env.ended().is_none() => {
+                composuite_core::control::validate_gripper_width(
+                    run.model(),
+                    GripperTarget::finger(goal.position, goal.max_effort).opening,
+                    goal.max_effort,
+                )
+                .map(|_| state)
+                .map_err(|e| e.to_string())
+            }
+            (Some(run), _) => Err(format!(
+                "episode {} is over; a new episode (reset) lets the gripper move again",
+                run.episode
+            )),
+            _ => Err("no episode yet (the task manager publishes the scene)".into()),
+        };
+        let state = match checked {
+            Ok(state) => state,
+            Err(why) => {
+                log.warn(format!("{} goal rejected: {why}", names::GRIPPER_ACTION));
+                if let Err(err) = Goals::<GripperCommandResult>::reject(server, request_id, &now) {
+                    log.warn(err);
+                }
+                return;
+            }
+        };
+        if let Err(err) = self
+            .gripper_goals
+            .accept(server, request_id, request.goal_id, &now)
+        {
+            log.warn(err);
+            return;
+        }
+        let run = self.run.as_mut().expect("checked above");
+        let following = GripperFollowing::new(goal, GripperParams::default());
+        let ended = run
+            .controllers
+            .start_gripper(following, request.goal_id, &state);
+        self.report(servers, ended, log);
+    }
+
+    fn on_trajectory_cancel(
+        &mut self,
+        servers: &ActionServers,
+        request_id: RmwRequestId,
+        request: &CancelGoalRequest,
+        log: &Logger,
+    ) {
+        let server = servers
+            .trajectory
+            .as_ref()
+            .expect("a cancel came: the server is up");
+        let targets = self.trajectory_goals.cancel_targets(request);
+        let mut events = Vec::new();
+        if let (Some(state), Some(run)) = (self.snapshot(), self.run.as_mut()) {
+            for goal in &targets {
+                events.extend(run.controllers.cancel_trajectory(*goal, &state));
+            }
+        }
+        if let Err(err) = self
+            .trajectory_goals
+            .answer_cancel(server, request_id, request, &targets)
+        {
+            log.warn(err);
+        }
+        self.report(servers, events, log);
+    }
+
+    fn on_gripper_cancel(
+        &mut self,
+        servers: &ActionServers,
+        request_id: RmwRequestId,
+        request: &CancelGoalRequest,
+        log: &Logger,
+    ) {
+        let server = servers
+            .gripper
+            .as_ref()
+            .expect("a cancel came: the server is up");
+        let targets = self.gripper_goals.cancel_targets(request);
+        let mut events = Vec::new();
+        if let (Some(state), Some(run)) = (self.snapshot(), self.run.as_mut()) {
+            for goal in &targets {
+                events.extend(run.controllers.cancel_gripper(*goal, &state));
+            }
+        }
+        if let Err(err) = self
+            .gripper_goals
+            .answer_cancel(server, request_id, request, &targets)
+        {
+            log.warn(err);
+        }
+        self.report(servers, events, log);
+    }
+
+    /// Tell the clients what the controllers did: feedback, and goals that ended.
+    fn report(
+        &mut self,
+        servers: &ActionServers,
+        events: impl IntoIterator<Item = Event<GoalId>>,
+        log: &Logger,
+    ) {
+        let Some(model) = self.model() else { return };
+        for event in events {
+            let outcome = match event {
+                Event::TrajectoryFeedback { goal, update } => {
+                    let Some(server) = &servers.trajectory else {
+                        continue;
+                    };
+                    server
+                        .send_feedback(goal, ros_control::feedback(model, &update))
+                        .map(|_| ())
+                        .map_err(|e| format!("trajectory feedback not sent: {e:?}"))
+                }
+                Event::TrajectoryEnded {
+                    goal: None,
+                    end,
+                    message,
+                    ..
+                } => {
+                    log.debug(format!("joint_trajectory {end:?}: {message}"));
+                    Ok(())
+                }
+                Event::TrajectoryEnded {
+                    goal: Some(goal),
+                    end,
+                    code,
+                    message,
+                } => {
+                    let Some(server) = &servers.trajectory else {
+                        continue;
+                    };
+                    say_end(log, names::TRAJECTORY_ACTION, end, &message);
+                    self.trajectory_goals.end(
+                        server,
+                        goal,
+                        goal_status(end),
+                        FollowJointTrajectoryResult {
+                            error_code: code,
+                            error_string: message,
+                        },
+                    )
+                }
+                Event::GripperEnded { goal, end, result } => {
+                    let Some(server) = &servers.gripper else {
+                        continue;
+                    };
+                    say_end(
+                        log,
+                        names::GRIPPER_ACTION,
+                        end,
+                        &format!(
+                            "position {:.4} m, reached_goal {}, stalled {}",
+                            result.position, result.reached_goal, result.stalled
+                        ),
+                    );
+                    self.gripper_goals.end(
+                        server,
+                        goal,
+                        goal_status(end),
+                        ros_control::gripper_result(&result),
+                    )
+                }
+            };
+            if let Err(err) = outcome {
+                log.warn(err);
+            }
+        }
+    }
+
+    /// One control period in ros2_control's order: read the hardware, update the controllers on
+    /// that reading, write their commands (the world simulates the period). Advanced by a goal,
+    /// the period is simulated only if a goal is still undecided after the update: an N-period
+    /// trajectory takes exactly N steps, like N `joint_command`s.
+    fn advance(&mut self, servers: &ActionServers, by: Advance, log: &Logger) {
+        let time_ns = self.sim_time_ns;
+        let Some(run) = &mut self.run else { return };
+        let period_ns = Self::period_ns(run);
         let started = Instant::now();
-        let result = run.env.step(&action);
+        let mut hardware = SimHardware::new(&mut run.env, time_ns);
+        let state = hardware.read();
+        let (command, events) = run.controllers.update(&state, period_ns);
+        let simulate = by == Advance::Command || run.controllers.running();
+        let written = simulate.then(|| {
+            let outcome = hardware.write(&command);
+            (outcome, hardware.last_step.take())
+        });
         let physics = started.elapsed();
-        match result {
+        self.report(servers, events, log);
+        let Some((_, step)) = written else { return };
+        let run = self.run.as_mut().expect("checked above");
+        match step.expect("a write records its step") {
             Ok(step) => {
                 for c in &step.info.clamped {
                     if run.clamp_reported.insert(c.joint.to_string()) {
@@ -486,30 +1117,32 @@ impl Sim {
                     ));
                 }
             }
-            Err(EnvError::EpisodeOver { .. }) if self.mode == Mode::Realtime => {
-                // The world stands still until the next episode; time and joint_states go on.
-                let run = self.run.as_ref().expect("checked above");
-                let world_msg = convert::world_state(
-                    &run.env.world_state(),
-                    convert::time_from_nanos(self.sim_time_ns),
-                    run.episode,
-                    run.env.steps(),
-                );
-                self.advance_clock();
-                self.publish_robot_state(&world_msg);
-                return;
-            }
             Err(err @ EnvError::EpisodeOver { .. }) => {
-                if !run.over_reported {
+                self.end_all_goals(
+                    servers,
+                    &format!("{err}; a new episode (reset) goes on"),
+                    log,
+                );
+                let run = self.run.as_mut().expect("checked above");
+                if self.mode == Mode::Realtime {
+                    // The world stands still until the next episode; time and joint_states go on.
+                    let world_msg = convert::world_state(
+                        &run.env.world_state(),
+                        convert::time_from_nanos(self.sim_time_ns),
+                        run.episode,
+                        run.env.steps(),
+                    );
+                    self.advance_clock();
+                    self.publish_robot_state(&world_msg);
+                } else if !run.over_reported {
                     run.over_reported = true;
-                    log.warn(format!(
-                        "joint_command ignored: {err} (said once per episode)"
-                    ));
+                    log.warn(format!("command ignored: {err} (said once per episode)"));
                 }
                 return;
             }
             Err(err) => {
                 log.warn(format!("command refused: {err}"));
+                self.end_all_goals(servers, &format!("the sim refused a command: {err}"), log);
                 return;
             }
         }
@@ -532,11 +1165,9 @@ impl Sim {
 
     fn advance_clock(&mut self) {
         if let Some(run) = &self.run {
-            let period_ns = (run.env.config().control_period() * 1e9).round() as u64;
-            self.sim_time_ns += period_ns;
+            self.sim_time_ns += Self::period_ns(run);
         }
     }
-
     /// Publish everything that describes the world now, stamped with the sim time: the
     /// episode's step (`world_state` first — the reward node's input — then `observation`),
     /// then the robot's state for ROS tools.
@@ -588,5 +1219,23 @@ impl Sim {
             ],
         });
         let _ = self.pubs.clock.publish(Clock { clock: stamp });
+    }
+}
+
+/// The action status of a goal that ended so.
+fn goal_status(end: End) -> GoalStatusEnum {
+    match end {
+        End::Succeeded => GoalStatusEnum::Succeeded,
+        End::Aborted => GoalStatusEnum::Aborted,
+        End::Canceled => GoalStatusEnum::Canceled,
+    }
+}
+
+/// Log a goal's end: success at debug level (there may be one per step), the rest louder.
+fn say_end(log: &Logger, action: &str, end: End, message: &str) {
+    match end {
+        End::Succeeded => log.debug(format!("{action} goal succeeded: {message}")),
+        End::Canceled => log.info(format!("{action} goal canceled: {message}")),
+        End::Aborted => log.warn(format!("{action} goal aborted: {message}")),
     }
 }

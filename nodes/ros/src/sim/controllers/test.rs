@@ -1,13 +1,18 @@
 //! The controllers on the mock hardware: no physics, every command followed exactly.
 
 use composuite_core::axes::Robot;
-use composuite_core::physics::{ARM_DOF, RobotModel, robot_model};
+use composuite_core::physics::{ARM_DOF, RobotModel, pad_gap, robot_model};
 
+use super::catalog::{self, Controller};
+use super::gripper::{GripperFollowing, GripperGoal, GripperOutcome, GripperParams};
+use super::running::{Controllers, End, Event, TRAJECTORY_PREEMPTED, TRAJECTORY_SUCCEEDED};
 use super::trajectory::{
     Following, JointTolerance, Outcome, Tolerances, TrajectoryRequest, Waypoint, code,
     resolve_tolerances, validate,
 };
-use crate::sim::hardware::{ArmCommand, Command, Hardware, JOINTS, MockHardware};
+use crate::sim::hardware::{
+    ArmCommand, Command, GRIPPER, Hardware, JOINTS, JointSnapshot, MockHardware,
+};
 
 const PERIOD_NS: u64 = 50_000_000;
 
@@ -306,4 +311,266 @@ fn goal_tolerances_resolve_as_the_controller_does() {
     goal.goal_tolerance.pop();
     goal.path_tolerance.push(entry(&names[3], -2.0));
     assert!(resolve_tolerances(&goal, &defaults, model).1.is_some());
+}
+
+fn gripper_state(time_ns: u64, position: f64, velocity: f64) -> JointSnapshot {
+    let mut state = MockHardware::new(panda(), home(), PERIOD_NS).read();
+    state.time_ns = time_ns;
+    state.positions[GRIPPER] = position;
+    state.velocities[GRIPPER] = velocity;
+    state
+}
+
+#[test]
+fn a_gripper_goal_within_tolerance_is_reached() {
+    let goal = GripperGoal {
+        position: 0.015,
+        max_effort: 15.0,
+    };
+    let mut following = GripperFollowing::new(goal, GripperParams::default());
+    // Written once, at the first update, as the pad opening of that finger position.
+    let target = following.command().expect("the goal is written first");
+    assert_eq!(target.opening, pad_gap(0.015));
+    assert_eq!(following.command(), None);
+    assert_eq!(
+        following.update(&gripper_state(0, 0.0, 0.05)),
+        GripperOutcome::Running
+    );
+    match following.update(&gripper_state(PERIOD_NS, 0.0105, 0.0)) {
+        GripperOutcome::Done { succeeded, result } => {
+            assert!(succeeded);
+            assert!(result.reached_goal && !result.stalled);
+            assert_eq!(result.position, 0.0105);
+            assert_eq!(result.effort, 15.0);
+        }
+        other => panic!("expected reached, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_gripper_held_open_by_an_object_stalls_after_the_timeout() {
+    let params = GripperParams::default();
+    let mut following = GripperFollowing::new(
+        GripperGoal {
+            position: 0.0,
+            max_effort: 0.0,
+        },
+        params,
+    );
+    // Closing for two periods, then stopped 0.015 m short (an object between the pads).
+    assert_eq!(
+        following.update(&gripper_state(0, 0.02, -0.1)),
+        GripperOutcome::Running
+    );
+    assert_eq!(
+        following.update(&gripper_state(PERIOD_NS, 0.017, -0.1)),
+        GripperOutcome::Running
+    );
+    let stopped_at = PERIOD_NS;
+    let timeout_ns = (params.stall_timeout * 1e9) as u64;
+    // Not moving for exactly the timeout is not yet a stall; one period more is.
+    assert_eq!(
+        following.update(&gripper_state(stopped_at + timeout_ns, 0.015, 0.0005)),
+        GripperOutcome::Running
+    );
+    match following.update(&gripper_state(
+        stopped_at + timeout_ns + PERIOD_NS,
+        0.015,
+        0.0,
+    )) {
+        GripperOutcome::Done { succeeded, result } => {
+            assert!(!succeeded, "stalling aborts unless allow_stalling");
+            assert!(result.stalled && !result.reached_goal);
+        }
+        other => panic!("expected stalled, got {other:?}"),
+    }
+}
+
+/// Read → update → write on the mock until no goal runs (at most `limit` periods); the events.
+fn run_controllers(
+    hardware: &mut MockHardware,
+    controllers: &mut Controllers<u32>,
+    limit: usize,
+) -> Vec<Event<u32>> {
+    let mut events = Vec::new();
+    for _ in 0..limit {
+        let state = hardware.read();
+        let (command, new) = controllers.update(&state, PERIOD_NS);
+        events.extend(new);
+        if !controllers.running() {
+            break;
+        }
+        hardware.write(&command).unwrap();
+    }
+    events
+}
+
+fn ended(events: &[Event<u32>]) -> Vec<(Option<u32>, End, i32, String)> {
+    events
+        .iter()
+        .filter_map(|e| match e {
+            Event::TrajectoryEnded {
+                goal,
+                end,
+                code,
+                message,
+            } => Some((*goal, *end, *code, message.clone())),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn a_trajectory_goal_writes_one_period_per_waypoint_then_succeeds_with_feedback() {
+    let model = panda();
+    let start = home();
+    let targets: Vec<[f64; ARM_DOF]> = (1..=3)
+        .map(|k| std::array::from_fn(|j| start[j] - 0.02 * k as f64))
+        .collect();
+    let following = Following::new(
+        validate(&request(model, &targets), model, 0).unwrap(),
+        Tolerances::default(),
+    );
+    let mut hardware = MockHardware::new(model, start, PERIOD_NS);
+    let mut controllers = Controllers::holding(std::array::from_fn(|j| start[j]));
+    assert_eq!(controllers.start_trajectory(following, Some(7)), None);
+    let events = run_controllers(&mut hardware, &mut controllers, 20);
+    // Three writes (no write once decided), four updates of feedback.
+    assert_eq!(hardware.written.len(), 3);
+    let feedback = events
+        .iter()
+        .filter(|e| matches!(e, Event::TrajectoryFeedback { goal: 7, .. }))
+        .count();
+    assert_eq!(feedback, 4);
+    assert_eq!(
+        ended(&events),
+        vec![(
+            Some(7),
+            End::Succeeded,
+            code::SUCCESSFUL,
+            TRAJECTORY_SUCCEEDED.to_string()
+        )]
+    );
+    // Held at the last waypoint afterwards.
+    let (command, _) = controllers.update(&hardware.read(), PERIOD_NS);
+    assert_eq!(command.arm, ArmCommand::Positions(targets[2]));
+}
+
+#[test]
+fn trajectories_end_on_preemption_cancel_and_direct_commands_with_the_reason() {
+    let model = panda();
+    let start = home();
+    let far: [f64; ARM_DOF] = std::array::from_fn(|j| start[j] + 0.1);
+    let slow = || {
+        let mut goal = request(model, &[far]);
+        goal.points[0].time_from_start_ns = 10 * PERIOD_NS as i64;
+        Following::new(validate(&goal, model, 0).unwrap(), Tolerances::default())
+    };
+    let mut hardware = MockHardware::new(model, start, PERIOD_NS);
+    let mut controllers = Controllers::holding(std::array::from_fn(|j| start[j]));
+    controllers.start_trajectory(slow(), Some(1));
+    run_controllers(&mut hardware, &mut controllers, 2);
+    // A new goal preempts: the old one is aborted as joint_trajectory_controller words it.
+    let preempted = controllers.start_trajectory(slow(), Some(2)).unwrap();
+    assert_eq!(
+        ended(&[preempted]),
+        vec![(
+            Some(1),
+            End::Aborted,
+            code::INVALID_GOAL,
+            TRAJECTORY_PREEMPTED.to_string()
+        )]
+    );
+    run_controllers(&mut hardware, &mut controllers, 2);
+    // Canceling another goal does nothing; canceling the running one holds the arm where it is.
+    let state = hardware.read();
+    assert_eq!(controllers.cancel_trajectory(1, &state), None);
+    let canceled = controllers.cancel_trajectory(2, &state).unwrap();
+    assert!(matches!(
+        canceled,
+        Event::TrajectoryEnded {
+            goal: Some(2),
+            end: End::Canceled,
+            ..
+        }
+    ));
+    assert!(!controllers.running());
+    let (command, _) = controllers.update(&state, PERIOD_NS);
+    assert_eq!(
+        command.arm,
+        ArmCommand::Positions(std::array::from_fn(|j| state.positions[j]))
+    );
+    // A direct command ends a running trajectory and names its source.
+    controllers.start_trajectory(slow(), Some(3));
+    let superseded = controllers
+        .command_arm(ArmCommand::Positions(far), "joint_command")
+        .unwrap();
+    let (_, end, code_, message) = ended(&[superseded]).remove(0);
+    assert_eq!((end, code_), (End::Aborted, code::INVALID_GOAL));
+    assert!(message.contains("`joint_command`"), "{message}");
+}
+
+#[test]
+fn a_new_gripper_goal_cancels_the_running_one() {
+    let mut hardware = MockHardware::new(panda(), home(), PERIOD_NS);
+    let mut controllers: Controllers<u32> = Controllers::holding([0.0; ARM_DOF]);
+    let goal = |position| {
+        GripperFollowing::new(
+            GripperGoal {
+                position,
+                max_effort: 0.0,
+            },
+            GripperParams::default(),
+        )
+    };
+    let state = hardware.read();
+    // Home has the fingers open (0.02 m): close, then (replacing that goal) half-close.
+    assert_eq!(controllers.start_gripper(goal(-0.0115), 1, &state), None);
+    let replaced = controllers.start_gripper(goal(0.0), 2, &state).unwrap();
+    assert!(matches!(
+        replaced,
+        Event::GripperEnded {
+            goal: 1,
+            end: End::Canceled,
+            ..
+        }
+    ));
+    // The mock moves the finger to its target at once: reached at the next update.
+    let events = run_controllers(&mut hardware, &mut controllers, 5);
+    assert!(matches!(
+        events.as_slice(),
+        [Event::GripperEnded {
+            goal: 2,
+            end: End::Succeeded,
+            ..
+        }]
+    ));
+    assert_eq!(hardware.written.len(), 1);
+}
+
+#[test]
+fn the_controllers_parameter_names_known_controllers_once() {
+    let names = |list: &[&str]| list.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    assert_eq!(
+        catalog::parse_list(&names(&[
+            "gripper_action_controller",
+            "joint_trajectory_controller"
+        ])),
+        Ok(vec![Controller::JointTrajectory, Controller::GripperAction])
+    );
+    let err = catalog::parse_list(&names(&["jtc"])).unwrap_err();
+    assert!(
+        err.contains("unknown controller `jtc`") && err.contains("forward_position_controller")
+    );
+    assert!(
+        catalog::parse_list(&names(&["forward_position_controller"; 2]))
+            .unwrap_err()
+            .contains("twice")
+    );
+    let model = panda();
+    assert_eq!(
+        Controller::GripperAction.command_interfaces(model),
+        vec![format!("{}/position", model.joints[ARM_DOF].name)]
+    );
+    assert_eq!(catalog::state_interfaces(model).len(), 16);
 }
