@@ -206,17 +206,20 @@ def launch_running(log_dir: Path, namespace: str, task: str, *extra: str, servic
 
 
 class Suite:
-    """The three nodes of one environment in `namespace`, each with its stderr in a file.
+    """The nodes of one environment in `namespace` (all three, or `nodes`), each with its stderr
+    in a file.
 
         suite = Suite(tmp_dir, "/t1", domain_id, task_manager={"service_mapping": "cyclone"})
         ...
         suite.stop()   # SIGINT, then asserts every node exited 0 within SHUTDOWN_TIMEOUT
     """
 
-    def __init__(self, log_dir: Path, namespace: str, domain_id: int, **params: dict[str, object]):
-        unknown = set(params) - set(NODES)
+    def __init__(self, log_dir: Path, namespace: str, domain_id: int,
+                 nodes: tuple[str, ...] = NODES, **params: dict[str, object]):
+        unknown = (set(params) | set(nodes)) - set(NODES)
         if unknown:
-            raise ValueError(f"parameters for unknown node(s) {sorted(unknown)}; nodes: {NODES}")
+            raise ValueError(f"unknown node(s) {sorted(unknown)}; nodes: {NODES}")
+        self.nodes = nodes
         self.namespace, self.domain_id = namespace, domain_id
         self.log_dir = Path(log_dir)
         self.log_dir.mkdir(parents=True, exist_ok=True)
@@ -226,7 +229,7 @@ class Suite:
         self.processes: dict[str, subprocess.Popen] = {}
         self.stderr_paths: dict[str, Path] = {}
         try:
-            for node in NODES:
+            for node in nodes:
                 args = [*suite_launcher(), str(binary(node)), "--ros-args", "-r", f"__ns:={namespace}"]
                 for name, value in params.get(node, {}).items():
                     if isinstance(value, bool):
@@ -245,7 +248,7 @@ class Suite:
         """Until every node has said it is up (its DDS participant and endpoints exist). An agent
         made before that announces itself to nobody and is found only at the next periodic
         announcement, seconds later."""
-        for node in NODES:
+        for node in self.nodes:
             self.wait_for_log(node, f"{self.namespace}/{node} up", timeout)
 
     def stderr(self, node: str) -> str:
@@ -301,9 +304,10 @@ class Suite:
 
 
 @contextlib.contextmanager
-def running(log_dir: Path, namespace: str, domain_id: int, **params):
-    """A Suite that is up for the `with` body, then stopped; its nodes must exit cleanly."""
-    suite = Suite(log_dir, namespace, domain_id, **params)
+def running(log_dir: Path, namespace: str, domain_id: int, nodes: tuple[str, ...] = NODES, **params):
+    """A Suite (all nodes, or `nodes`) that is up for the `with` body, then stopped; its nodes
+    must exit cleanly."""
+    suite = Suite(log_dir, namespace, domain_id, nodes, **params)
     try:
         suite.wait_until_up()
     except BaseException:

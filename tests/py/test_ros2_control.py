@@ -24,11 +24,14 @@ import time
 import pytest
 from action_msgs.msg import GoalStatus
 from builtin_interfaces.msg import Duration
-from composuite_msgs.msg import Observation
+from composuite_msgs.msg import Observation, Scene, StagedReward, WorldState
 from composuite_msgs.srv import Reset, SetTask
 from control_msgs.action import FollowJointTrajectory, GripperCommand
+from control_msgs.msg import GripperCommand as GripperCommandMsg
 from controller_manager_msgs.srv import ListControllers, ListHardwareInterfaces
+from rcl_interfaces.msg import Log
 from rclpy.action import ActionClient, get_action_names_and_types
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectoryPoint
@@ -43,6 +46,9 @@ PERIOD_NS = 50_000_000
 TRAJECTORY_ACTION = f"{NS}/joint_trajectory_controller/follow_joint_trajectory"
 GRIPPER_ACTION = f"{NS}/gripper_action_controller/gripper_cmd"
 FORWARD = f"{NS}/forward_position_controller/commands"
+# The scene's QoS: reliable, transient local, keep last 1 (a late joiner gets the current one).
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 # The left finger joint's closed limit (m): the gripper's "close".
 FINGER_CLOSED = -0.0115
 
@@ -75,6 +81,15 @@ class Cell:
         node.create_subscription(Observation, f"{NS}/observation",
                                  lambda m: self.observations.__setitem__((m.episode, m.step), m), 100)
         node.create_subscription(JointState, f"{NS}/joint_states", self.states.append, 100)
+        self.world_states: dict[tuple[int, int], WorldState] = {}
+        self.rewards: dict[tuple[int, int], StagedReward] = {}
+        self.scenes: list[Scene] = []
+        node.create_subscription(WorldState, f"{NS}/world_state",
+                                 lambda m: self.world_states.__setitem__((m.episode, m.step), m), 100)
+        node.create_subscription(StagedReward, f"{NS}/reward",
+                                 lambda m: self.rewards.__setitem__((m.episode, m.step), m), 100)
+        node.create_subscription(Scene, f"{NS}/scene", self.scenes.append, LATCHED)
+        self.gripper_command = node.create_publisher(GripperCommandMsg, f"{NS}/gripper_command", 10)
         self.command = node.create_publisher(JointState, f"{NS}/joint_command", 10)
         self.forward = node.create_publisher(Float64MultiArray, FORWARD, 10)
         self.set_task = node.create_client(SetTask, f"{NS}/set_task")
@@ -263,10 +278,25 @@ def test_a_goal_naming_an_unknown_joint_is_rejected_and_the_log_says_why(cell, s
     start = cell.reset(4)
     names = list(cell.arm)
     names[2] = "elbow"
+    logs: list = []
+    cell.agent.node.create_subscription(
+        Log, "/rosout", logs.append,
+        QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE))
     since = len(suite.stderr("sim"))
     handle = cell.send(cell.trajectory, trajectory_goal(names, [start]))
     assert not handle.accepted
-    suite.wait_for_log("sim", "goal rejected: Incoming joint elbow doesn't match", since=since)
+    reason = "goal rejected: Incoming joint elbow doesn't match the controller's joints"
+    suite.wait_for_log("sim", reason, since=since)
+
+    # The reason reaches a ROS user on /rosout (`ros2 topic echo /rosout`, rqt_console): offer
+    # the bad goal until the rosout subscription has matched too.
+    def warned():
+        if not any(reason in m.msg for m in logs):
+            assert not cell.send(cell.trajectory, trajectory_goal(names, [start])).accepted
+            cell.agent.executor.spin_once(timeout_sec=0.1)
+        return [m for m in logs if reason in m.msg]
+    record = cell.agent.spin_until(warned, what="the rejection on /rosout")[0]
+    assert record.level == Log.WARN and record.name == f"{NS.strip('/')}.sim"
 
 
 def test_a_new_goal_preempts_the_running_one_and_cancel_ends_a_goal(cell):
@@ -342,3 +372,51 @@ def test_forward_commands_step_like_joint_command_and_bad_ones_are_refused(cell,
     replay = env_replay_run({"task": TASK, "seed": seed,
                              "commands": [{"joints": p, "gripper": None} for p in points]})
     assert [float_bits(o.flat) for o in observations] == [float_bits(r["flat"]) for r in replay]
+
+
+def test_a_real_cell_world_state_from_outside_drives_the_reward_node_alone(cell, tmp_path, domain):
+    """A real arm's cell has no sim: the arm's driver offers the controllers, and the object's pose
+    comes from mocap or perception into `world_state`. Here an outside publisher (this test)
+    plays the world states of a real episode — the expert's, recorded from the sim — to a reward
+    node running alone, with the scene it belongs to: the rewards and success are the sim's own,
+    bit for bit."""
+    expert = env_replay_expert(TASK, 0)
+    success_step = expert["success_step"]
+    cell.reset(0)
+    episode = cell.episode
+    held = expert["commands"][0]["gripper"]
+    for k, c in enumerate(expert["commands"][:success_step], start=1):
+        if c["gripper"] is not None and c["gripper"] != held:
+            held = c["gripper"]
+            cell.gripper_command.publish(GripperCommandMsg(position=held[0], max_effort=held[1]))
+        cell.command.publish(JointState(name=cell.arm, position=c["joints"]))
+        cell.agent.spin_until(lambda: (episode, k) in cell.rewards and (episode, k) in cell.world_states,
+                              what=f"reward and world_state of step {k}")
+    recorded = [cell.world_states[(episode, k)] for k in range(1, success_step + 1)]
+    sim_rewards = [cell.rewards[(episode, k)] for k in range(1, success_step + 1)]
+    assert sim_rewards[-1].success, "the expert's episode should succeed at its success step"
+    scene = cell.agent.spin_until(lambda: next((m for m in reversed(cell.scenes) if m.episode == episode), None),
+                                  what="the episode's scene")
+
+    with node_suite.running(tmp_path, "/cell", domain, nodes=("reward",)) as alone:
+        node = cell.agent.node
+        scene_pub = node.create_publisher(Scene, "/cell/scene", LATCHED)
+        world_pub = node.create_publisher(WorldState, "/cell/world_state", 10)
+        rewards: dict[int, StagedReward] = {}
+        node.create_subscription(StagedReward, "/cell/reward", lambda m: rewards.__setitem__(m.step, m), 100)
+        cell.agent.spin_until(lambda: world_pub.get_subscription_count() >= 1
+                              and scene_pub.get_subscription_count() >= 1
+                              and node.count_publishers("/cell/reward") >= 1,
+                              what="the lone reward node to match")
+        scene_pub.publish(scene)
+        # Volatile topics: offer the first world state until its reward comes back (matched both ways).
+        cell.agent.spin_until(lambda: rewards.get(1) or world_pub.publish(recorded[0]), what="the first reward")
+        for w in recorded[1:]:
+            world_pub.publish(w)
+            cell.agent.spin_until(lambda: w.step in rewards, what=f"the reward of step {w.step}")
+        alone.assert_running()
+    cell_rewards = [rewards[k] for k in range(1, success_step + 1)]
+    assert float_bits(r.total for r in cell_rewards) == float_bits(r.total for r in sim_rewards)
+    assert [list(r.stage_values) for r in cell_rewards] == [list(r.stage_values) for r in sim_rewards]
+    assert [r.success for r in cell_rewards] == [r.success for r in sim_rewards]
+    assert [ns_of(r.header.stamp) for r in cell_rewards] == [ns_of(w.header.stamp) for w in recorded]

@@ -253,7 +253,7 @@ impl<Id: Copy + PartialEq> Controllers<Id> {
 
     fn end_trajectory(&mut self, end: End, code: i32, message: String) -> Option<Event<Id>> {
         let active = self.trajectory.take()?;
-        // A topic trajectory ends silently unless it reached its end; there is no one to tell.
+        // Also for a topic trajectory (goal `None`): the node only logs it, there is no client.
         Some(Event::TrajectoryEnded {
             goal: active.goal,
             end,
