@@ -167,7 +167,12 @@ def test_params_file_holds_every_parameter_at_its_default():
         in_file.update(params.get(f"/**/{node}", {}).get("ros__parameters", {}))
         assert set(in_file) == set(declared), node
         for name, value in in_file.items():
-            shown = str(value).lower() if isinstance(value, bool) else str(value)
+            if isinstance(value, bool):
+                shown = str(value).lower()
+            elif isinstance(value, list):  # a YAML flow list, as --help shows arrays
+                shown = "[" + ", ".join(str(v) for v in value) + "]"
+            else:
+                shown = str(value)
             assert shown == declared[name], (node, name, value, declared[name])
 
 

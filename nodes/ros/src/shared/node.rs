@@ -204,8 +204,33 @@ pub fn show_value(v: &ParameterValue) -> String {
         ParameterValue::Boolean(b) => b.to_string(),
         ParameterValue::Integer(i) => i.to_string(),
         ParameterValue::Double(d) => format!("{d:?}"),
+        // Arrays as YAML flow lists, which `-p name:=[a, b]` and params files both read.
+        ParameterValue::StringArray(items) => format!("[{}]", items.join(", ")),
+        ParameterValue::BooleanArray(items) => list(items),
+        ParameterValue::IntegerArray(items) => list(items),
+        ParameterValue::DoubleArray(items) => {
+            format!(
+                "[{}]",
+                items
+                    .iter()
+                    .map(|d| format!("{d:?}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        }
         other => format!("{other:?}"),
     }
+}
+
+fn list<T: fmt::Display>(items: &[T]) -> String {
+    format!(
+        "[{}]",
+        items
+            .iter()
+            .map(T::to_string)
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
 }
 
 pub use crate::shared::param_server::ParamChange;

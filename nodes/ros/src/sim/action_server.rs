@@ -147,10 +147,9 @@ impl<R: Clone + Default> Goals<R> {
         )
     }
 
-    /// The running goals a cancel request names (the caller ends them, then calls
-    /// [`Goals::answer_cancel`]). A zero id and zero stamp name every goal; a stamp names the goals
+    /// The running goals a cancel request names. A zero id and zero stamp name every goal; a stamp names the goals
     /// accepted at or before it; an id names that goal.
-    pub fn cancel_targets(&self, request: &CancelGoalRequest) -> Vec<GoalId> {
+    fn cancel_targets(&self, request: &CancelGoalRequest) -> Vec<GoalId> {
         let GoalInfo { goal_id, stamp } = &request.goal_info;
         let by_stamp = stamp.to_nanos() != 0;
         self.goals
@@ -165,8 +164,29 @@ impl<R: Clone + Default> Goals<R> {
             .collect()
     }
 
+    /// Handle a cancel request: `end` ends each running goal it names (giving what to report,
+    /// or `None` if that goal was not running after all), then the reply lists the ended goals.
+    pub fn cancel<E>(
+        &self,
+        server: &impl Server<R>,
+        request_id: RmwRequestId,
+        request: &CancelGoalRequest,
+        mut end: impl FnMut(GoalId) -> Option<E>,
+    ) -> (Vec<E>, Result<(), ReplyError>) {
+        let mut ended = Vec::new();
+        let mut canceling = Vec::new();
+        for goal in self.cancel_targets(request) {
+            if let Some(event) = end(goal) {
+                ended.push(event);
+                canceling.push(goal);
+            }
+        }
+        let replied = self.answer_cancel(server, request_id, request, &canceling);
+        (ended, replied)
+    }
+
     /// Answer a cancel request: `canceling` are the goals it ended (empty: say why not).
-    pub fn answer_cancel(
+    fn answer_cancel(
         &self,
         server: &impl Server<R>,
         request_id: RmwRequestId,

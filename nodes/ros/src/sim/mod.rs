@@ -952,20 +952,16 @@ impl Sim {
             .trajectory
             .as_ref()
             .expect("a cancel came: the server is up");
-        let targets = self.trajectory_goals.cancel_targets(request);
-        let mut events = Vec::new();
-        if let (Some(state), Some(run)) = (self.snapshot(), self.run.as_mut()) {
-            for goal in &targets {
-                events.extend(run.controllers.cancel_trajectory(*goal, &state));
-            }
-        }
-        if let Err(err) = self
+        let state = self.snapshot();
+        let mut run = self.run.as_mut();
+        let ended = self
             .trajectory_goals
-            .answer_cancel(server, request_id, request, &targets)
-        {
-            log.warn(err);
-        }
-        self.report(servers, events, log);
+            .cancel(server, request_id, request, |goal| {
+                run.as_deref_mut()?
+                    .controllers
+                    .cancel_trajectory(goal, state.as_ref()?)
+            });
+        self.report_cancel(servers, ended, log);
     }
 
     fn on_gripper_cancel(
@@ -979,17 +975,27 @@ impl Sim {
             .gripper
             .as_ref()
             .expect("a cancel came: the server is up");
-        let targets = self.gripper_goals.cancel_targets(request);
-        let mut events = Vec::new();
-        if let (Some(state), Some(run)) = (self.snapshot(), self.run.as_mut()) {
-            for goal in &targets {
-                events.extend(run.controllers.cancel_gripper(*goal, &state));
-            }
-        }
-        if let Err(err) = self
+        let state = self.snapshot();
+        let mut run = self.run.as_mut();
+        let ended = self
             .gripper_goals
-            .answer_cancel(server, request_id, request, &targets)
-        {
+            .cancel(server, request_id, request, |goal| {
+                run.as_deref_mut()?
+                    .controllers
+                    .cancel_gripper(goal, state.as_ref()?)
+            });
+        self.report_cancel(servers, ended, log);
+    }
+
+    /// Report the goals a cancel ended (their results), or say why the reply was not sent.
+    fn report_cancel(
+        &mut self,
+        servers: &ActionServers,
+        ended: (Vec<Event<GoalId>>, Result<(), action_server::ReplyError>),
+        log: &Logger,
+    ) {
+        let (events, replied) = ended;
+        if let Err(err) = replied {
             log.warn(err);
         }
         self.report(servers, events, log);
