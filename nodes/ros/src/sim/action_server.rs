@@ -31,6 +31,7 @@ struct Goal<R> {
 
 /// One action's goals. The server itself stays with the node's event loop (its request streams
 /// borrow it); each reply takes it as an argument.
+#[derive(Default)]
 pub struct Goals<R> {
     /// In acceptance order.
     goals: Vec<Goal<R>>,
@@ -96,12 +97,6 @@ where
         self.send_goal_statuses(status)
             .map(|_| ())
             .map_err(|e| reply_error("goal status", e))
-    }
-}
-
-impl<R: Clone + Default> Default for Goals<R> {
-    fn default() -> Self {
-        Goals { goals: Vec::new() }
     }
 }
 

@@ -634,8 +634,7 @@ impl Sim {
     fn end_all_goals(&mut self, servers: &ActionServers, why: &str, log: &Logger) {
         let Some(state) = self.snapshot() else { return };
         let Some(run) = &mut self.run else { return };
-        let positions = run.env.world().arm_positions();
-        let events = run.controllers.abort_all(why, positions, &state);
+        let events = run.controllers.abort_all(why, &state);
         self.report(servers, events, log);
     }
 
@@ -650,13 +649,11 @@ impl Sim {
     }
 
     fn on_gripper(&mut self, servers: &ActionServers, command: &GripperCommand, log: &Logger) {
-        let Some(state) = self.snapshot() else {
-            self.episode_for("gripper_command", log);
-            return;
-        };
+        let time_ns = self.sim_time_ns;
         let Some(run) = self.episode_for("gripper_command", log) else {
             return;
         };
+        let state = read_env(&run.env, time_ns);
         // Checked now so a bad command is refused on arrival, not at the next step.
         if let Err(err) = composuite_core::control::validate_gripper_width(
             run.model(),
@@ -675,13 +672,11 @@ impl Sim {
     }
 
     fn on_joint_command(&mut self, servers: &ActionServers, command: &JointState, log: &Logger) {
-        let Some(state) = self.snapshot() else {
-            self.episode_for("joint_command", log);
-            return;
-        };
+        let time_ns = self.sim_time_ns;
         let Some(run) = self.episode_for("joint_command", log) else {
             return;
         };
+        let state = read_env(&run.env, time_ns);
         let model = run.model();
         let (arm, finger_gap) = match convert::arm_command(model, command) {
             Ok(parsed) => parsed,
@@ -1089,15 +1084,16 @@ impl Sim {
         let state = hardware.read();
         let (command, events) = run.controllers.update(&state, period_ns);
         let simulate = by == Advance::Command || run.controllers.running();
-        let written = simulate.then(|| {
-            let outcome = hardware.write(&command);
-            (outcome, hardware.last_step.take())
+        let step = simulate.then(|| {
+            // The write's outcome is also in `last_step`, with the step's details.
+            let _ = hardware.write(&command);
+            hardware.last_step.take().expect("a write records its step")
         });
         let physics = started.elapsed();
         self.report(servers, events, log);
-        let Some((_, step)) = written else { return };
+        let Some(step) = step else { return };
         let run = self.run.as_mut().expect("checked above");
-        match step.expect("a write records its step") {
+        match step {
             Ok(step) => {
                 for c in &step.info.clamped {
                     if run.clamp_reported.insert(c.joint.to_string()) {

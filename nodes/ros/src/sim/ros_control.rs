@@ -3,7 +3,7 @@
 //! `controller_manager`'s `list_controllers` / `list_hardware_interfaces` answer.
 
 use composuite_core::physics::{ARM_DOF, RobotModel};
-use composuite_msgs::builtin_interfaces::msg::{Duration as DurationMsg, Time};
+use composuite_msgs::builtin_interfaces::msg::Duration as DurationMsg;
 use composuite_msgs::control_msgs::action::{
     FollowJointTrajectoryFeedback, FollowJointTrajectoryGoal, GripperCommandResult,
 };
@@ -88,7 +88,7 @@ pub fn feedback(model: &RobotModel, update: &Update) -> FollowJointTrajectoryFee
     let desired = &update.desired;
     FollowJointTrajectoryFeedback {
         header: convert::header(convert::time_from_nanos(update.time_ns)),
-        joint_names: arm_joint_names(model),
+        joint_names: convert::joint_names(model)[..ARM_DOF].to_vec(),
         desired: point(
             desired.iter().map(|s| s.position).collect(),
             desired.iter().map(|s| s.velocity).collect(),
@@ -120,14 +120,6 @@ pub fn gripper_result(result: &GripperResult) -> GripperCommandResult {
         stalled: result.stalled,
         reached_goal: result.reached_goal,
     }
-}
-
-/// The arm's joint names, in the controllers' order.
-pub fn arm_joint_names(model: &RobotModel) -> Vec<String> {
-    model.joints[..ARM_DOF]
-        .iter()
-        .map(|j| j.name.clone())
-        .collect()
 }
 
 /// `list_controllers`: the broadcaster and the controllers up, all active. Interfaces are listed
@@ -190,9 +182,4 @@ pub fn list_hardware_interfaces(
             .map(|name| entry(name, false))
             .collect(),
     }
-}
-
-/// A `builtin_interfaces/Time` of `ns`.
-pub fn time(ns: u64) -> Time {
-    convert::time_from_nanos(ns)
 }

@@ -181,14 +181,9 @@ impl<Id: Copy + PartialEq> Controllers<Id> {
         self.end_gripper(End::Canceled, state)
     }
 
-    /// End every goal (a new episode, the node stopping), holding the arm at `positions`.
-    pub fn abort_all(
-        &mut self,
-        message: &str,
-        positions: [f64; ARM_DOF],
-        state: &JointSnapshot,
-    ) -> Vec<Event<Id>> {
-        self.arm = ArmCommand::Positions(positions);
+    /// End every goal (a new episode, the node stopping), holding the arm where `state` has it.
+    pub fn abort_all(&mut self, message: &str, state: &JointSnapshot) -> Vec<Event<Id>> {
+        self.arm = ArmCommand::Positions(arm_positions(state));
         let trajectory = self.end_trajectory(End::Aborted, code::INVALID_GOAL, message.into());
         let gripper = self.end_gripper(End::Aborted, state);
         self.pending_gripper = None;
