@@ -442,7 +442,7 @@ class Publisher:
 
     def matched(self) -> int:
         """How many readers currently match this writer."""
-        return len(self.writer.get_matched_subscriptions())
+        return matched_readers(self.writer)
 
     def wait_for_subscribers(self, count: int = 1, timeout: float = 10.0) -> None:
         _wait_until(lambda: self.matched() >= count, timeout, f"{count} subscriber(s) of {self.dds_topic}")
@@ -495,7 +495,7 @@ class Subscription:
 
     def matched(self) -> int:
         """How many writers currently match this reader."""
-        return len(self.reader.get_matched_publications())
+        return matched_writers(self.reader)
 
     def wait_for_publishers(self, count: int = 1, timeout: float = 10.0) -> None:
         _wait_until(lambda: self.matched() >= count, timeout, f"{count} publisher(s) of {self.dds_topic}")
@@ -555,6 +555,18 @@ def _describe(predicate) -> str:
     if isinstance(predicate, Mapping):
         return repr(dict(predicate))
     return getattr(predicate, "__name__", repr(predicate))
+
+
+def matched_readers(writer) -> int:
+    """How many readers match `writer`, from its matched status. Not the binding's
+    `get_matched_subscriptions()`: it sizes its list with one call and indexes it with the count a
+    second call returns, so a reader matching in between raises IndexError (seen in CI)."""
+    return writer.get_publication_matched_status().current_count
+
+
+def matched_writers(reader) -> int:
+    """How many writers match `reader` (see `matched_readers` for why not the list getter)."""
+    return reader.get_subscription_matched_status().current_count
 
 
 def _wait_until(condition: Callable[[], bool], timeout: float, what: str, poll: float = 0.01) -> None:
@@ -649,7 +661,7 @@ class ServiceClient:
         self._ready = False
 
     def service_is_ready(self) -> bool:
-        return bool(self.writer.get_matched_subscriptions()) and bool(self.reader.get_matched_publications())
+        return matched_readers(self.writer) > 0 and matched_writers(self.reader) > 0
 
     def wait_for_service(self, timeout: float = 10.0) -> None:
         try:

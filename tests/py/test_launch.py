@@ -331,7 +331,7 @@ def test_a_reply_written_before_the_clients_reader_exists_does_not_break_the_ser
         orphan = DataWriter(agent.participant, agent._topic(request_topic, request_wire),
                             qos=ros_agent.qos_profile("services").to_dds())
         deadline = time.monotonic() + 15
-        while not orphan.get_matched_subscriptions():
+        while not ros_agent.matched_readers(orphan):
             assert time.monotonic() < deadline, "the task manager's reset server never matched"
             time.sleep(0.05)
         orphan.write(request_wire(client_guid=1, seq=1, seed=4, use_seed=True))

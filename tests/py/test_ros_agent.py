@@ -16,6 +16,7 @@ import sys
 import textwrap
 import threading
 import time
+from types import SimpleNamespace
 
 import pytest
 from cyclonedds.idl import IdlStruct
@@ -232,8 +233,8 @@ def test_a_sample_that_cannot_be_taken_is_reported_not_fatal(domain):
         def take(self, N):
             raise ValueError("bytes do not decode as JointState")
 
-        def get_matched_publications(self):
-            return []
+        def get_subscription_matched_status(self):
+            return SimpleNamespace(current_count=0)
 
     with Agent("/env_00", domain_id=domain) as agent:
         subscription = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
