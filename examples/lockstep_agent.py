@@ -45,7 +45,7 @@ class LockstepEnv:
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        # Everything received, keyed by (episode, step); cleared at each reset.
+        # Everything received, keyed by (episode, step); earlier episodes' dropped at each reset.
         self.observations: dict[tuple[int, int], Observation] = {}
         self.rewards: dict[tuple[int, int], StagedReward] = {}
         self.statuses: dict[tuple[int, int], EpisodeStatus] = {}
@@ -83,8 +83,9 @@ class LockstepEnv:
         """Start an episode (`seed`, or the suite's next one) and return its step-0 observation.
 
         Right after discovery each side learns of the other on its own, so the first reply, or
-        the step-0 `joint_states` this agent takes the joint names from, can go out before the
-        suite knows this agent: ask again (a retry without a seed moves on to the next seed)."""
+        a step-0 message, can go out before the suite's writer knows this agent's reader: wait
+        for the step-0 observation, reward and episode status (and `joint_states`, for the joint
+        names) and ask again if one is missing (a retry without a seed moves on to the next seed)."""
         request = Reset.Request(seed=seed or 0, use_seed=seed is not None)
         for _ in range(attempts):
             self._spin_until(self.reset_client.service_is_ready, "reset service")
@@ -95,12 +96,13 @@ class LockstepEnv:
             reply = future.result()
             if not reply.success:
                 raise RuntimeError(f"reset refused: {reply.message}")
-            self.observations.clear()
-            self.rewards.clear()
-            self.statuses.clear()
             self.episode, self.step_count = reply.episode, 0
-            # The joint names come with joint_states (published at every reset and step).
-            if self._spin_for(lambda: bool(self.joint_names), 1.0):
+            for store in (self.observations, self.rewards, self.statuses):
+                for key in [k for k in store if k[0] != reply.episode]:
+                    del store[key]
+            key = (reply.episode, 0)
+            if self._spin_for(lambda: (bool(self.joint_names) and key in self.observations
+                                       and key in self.rewards and key in self.statuses), 1.0):
                 return reply.observation
         raise TimeoutError(f"no reset reply with joint_states after {attempts} attempts; "
                            "is the suite running (lockstep) in this namespace?")

@@ -9,8 +9,8 @@ Lessons this follows (rclpy 7.1.6 on Fast DDS; the README's "Gymnasium" section 
 - step messages are matched by (episode, step), never "the latest message";
 - each side of a DDS match learns of it on its own: a volatile sample sent before the sender
   knows this reader is lost. Before the first step a channel waits until every topic matched here
-  and a reset's step-0 observation arrived (so the sim's writer knows this reader), and gives the
-  writers that publish nothing at a reset (`reward`, `episode`) a moment to match too.
+  and a reset's step-0 observation, reward and episode status all arrived (so each of the three
+  writers knows this participant's reader); otherwise it asks the same reset again.
 """
 
 from __future__ import annotations
@@ -54,16 +54,15 @@ LATER_ATTEMPT_S = 3.0
 
 def attempt_budget(attempt: int) -> float:
     return ATTEMPT_BUDGETS_S[attempt] if attempt < len(ATTEMPT_BUDGETS_S) else LATER_ATTEMPT_S
-# How long the step-0 messages of a reset may take to arrive before the reset is asked again.
+# How long the step-0 messages of a reset (observation, reward, episode status) may take to
+# arrive before the reset is asked again. Their arrival is the proof that each of the three
+# writers has matched this participant's reader: a step's messages are volatile, so a step
+# published before that match would be lost.
 STEP0_WAIT_S = 1.0
 # First contact (discovery of every endpoint) may take this many times the step timeout: RustDDS
 # and Fast DDS announce endpoints again only every few seconds when a first announcement is lost,
 # which happens on a loaded machine.
 DISCOVERY_TIMEOUT_FACTOR = 3.0
-# After this participant matched a writer that publishes nothing at a reset (`reward`), how long
-# to give that writer to match this reader before the first step's sample depends on it.
-# Discovery is symmetric (both sides exchange their endpoints at once), so this is generous.
-WRITER_SETTLE_S = 0.5
 
 
 def normalize_namespace(namespace: str) -> str:
@@ -183,8 +182,6 @@ class Channel:
         self.reset_client = node.create_client(Reset, f"{prefix}/reset")
         self.set_task_client = node.create_client(SetTask, f"{prefix}/set_task")
         self.sample_tasks_client = node.create_client(SampleTasks, f"{prefix}/sample_tasks")
-        # When each subscription first had a matched publisher (for WRITER_SETTLE_S).
-        self._matched_since: dict[str, float] = {}
         self.episode = 0
         self.step_count = 0
 
@@ -214,14 +211,10 @@ class Channel:
 
     def missing(self) -> list[str]:
         """What this channel still waits for before it can reset and step."""
-        now = time.monotonic()
         missing = []
-        for name, subscription in self.subscriptions.items():
+        for subscription in self.subscriptions.values():
             if subscription.get_publisher_count() == 0:
                 missing.append(f"a publisher of {subscription.topic_name}")
-                self._matched_since.pop(name, None)
-            else:
-                self._matched_since.setdefault(name, now)
         for client in (self.reset_client, self.set_task_client):
             if not client.service_is_ready():
                 missing.append(f"the {client.srv_name} service")
@@ -229,12 +222,6 @@ class Channel:
                 or self.joint_command.get_subscription_count() == 0):
             missing.append(f"the sim's command readers in {self.namespace}")
         return missing
-
-    def settled(self) -> bool:
-        """Every writer had WRITER_SETTLE_S to match this participant's readers."""
-        now = time.monotonic()
-        return (not self.missing()
-                and all(now - since >= WRITER_SETTLE_S for since in self._matched_since.values()))
 
     @property
     def discovery_timeout(self) -> float:
@@ -326,17 +313,17 @@ class Channel:
         return reply
 
     def await_step0(self) -> bool:
-        """After a reset reply: whether its step-0 observation came (so the sim's writer knows
-        this reader); if so, also give the writers with nothing at step 0 time to match."""
+        """After a reset reply: whether the episode's step-0 observation, reward and status all
+        came (so the three writers know this participant's readers); they are dropped then."""
         if not self.participant.spin_for(self.step0_arrived, STEP0_WAIT_S):
             return False
-        self.participant.spin_for(self.settled, 2 * WRITER_SETTLE_S)
+        for store in (self.observations, self.rewards, self.statuses):
+            del store[(self.episode, 0)]
         return True
 
     def step0_arrived(self) -> bool:
-        # The sim publishes the step-0 observation at a reset (`reward` and `episode` start at
-        # step 1: WRITER_SETTLE_S covers those writers).
-        return (self.episode, 0) in self.observations
+        key = (self.episode, 0)
+        return key in self.observations and key in self.rewards and key in self.statuses
 
     def send_reference_action(self, action) -> None:
         self.reference_action.publish(Float64MultiArray(data=[float(a) for a in action]))

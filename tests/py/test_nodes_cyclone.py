@@ -328,6 +328,11 @@ def test_500_lockstep_steps_bit_identical_to_env_replay(driver):
     seed = 11
     reply = driver.reset(seed)
     assert len(reply.observation.flat) == 93
+    # The reset state's reward: its stages, stamped like the step-0 observation, but it earns 0.
+    start = driver.reward.wait_for({"episode": driver.episode, "step": 0}, timeout=STEP_TIMEOUT)
+    assert ns_of(start.header.stamp) == ns_of(reply.observation.header.stamp)
+    assert start.total == 0.0 and not start.success and len(start.stage_values) == 5
+    assert max(start.stage_values) > 0, "the gripper starts some way from the object: reach > 0"
     rng = random.Random(20261122)
     targets = random_walk(rng, driver.start_pose, 500)
     # Gripper changes: through gripper_command, and as finger joints inside joint_command.
@@ -362,8 +367,11 @@ def test_500_lockstep_steps_bit_identical_to_env_replay(driver):
     status = driver.status.wait_for({"episode": driver.episode, "step": 500}, timeout=STEP_TIMEOUT)
     assert status.done and status.truncated and not status.terminated and status.seed == seed
     assert ns_of(status.header.stamp) == stamps[-1]
-    steps_seen = [s.step for s in driver.status.samples if s.episode == driver.episode]
-    assert steps_seen == list(range(1, 501))
+    # ... and announces the episode's start: step 0, with the reset's stamp, running, return 0.
+    statuses = [s for s in driver.status.samples if s.episode == driver.episode]
+    assert [s.step for s in statuses] == list(range(0, 501))
+    start = statuses[0]
+    assert ns_of(start.header.stamp) == stamps[0] and not start.done and start.episode_return == 0.0
     replay = compare_with_replay(TASK, seed, commands, observations, rewards)
     assert replay[-1]["truncated"]
     assert status.episode_return == pytest.approx(sum(r["reward"] for r in replay[1:]), rel=1e-12)

@@ -255,8 +255,9 @@ impl Episode {
     }
 }
 
-/// The episodes of a bag, from its `episode` (EpisodeStatus) and `reward` (StagedReward)
-/// topics, in the order they started.
+/// The episodes of a bag that took at least one step, from its `episode` (EpisodeStatus) and
+/// `reward` (StagedReward) topics, in the order they started. (An episode ended before its first
+/// step, e.g. the one `set_task` starts before a seeded `reset`, has only its step-0 status.)
 pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
     let mut found: Vec<Episode> = Vec::new();
     let mut index: BTreeMap<(String, u32, u64), usize> = BTreeMap::new();
@@ -301,6 +302,9 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
             "composuite_msgs/msg/StagedReward" => {
                 let r: msg::StagedReward =
                     cdr::decode(m.data).map_err(|e| format!("{}: {e}", m.topic))?;
+                if r.step == 0 {
+                    return Ok(()); // the reset state: where the episode starts, not a step of it
+                }
                 let stage = stages
                     .entry((namespace_of(m.topic), r.episode))
                     .or_insert(-1);
@@ -317,6 +321,7 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
             file.display()
         );
     }
+    found.retain(|e| e.length > 0);
     for e in &mut found {
         if let Some(stage) = stages.get(&(e.namespace.clone(), e.episode)) {
             e.furthest_stage = *stage;

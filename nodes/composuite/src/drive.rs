@@ -190,9 +190,21 @@ pub fn drive(
     }
     let mut outcomes = Vec::new();
     smol::block_on(async {
-        let mut observation_stream = std::pin::pin!(observations.async_stream());
-        let mut reward_stream = std::pin::pin!(rewards.async_stream());
-        let mut status_stream = std::pin::pin!(statuses.async_stream());
+        // The three step topics as one stream (unreadable samples are None).
+        let incoming = futures::stream::select(
+            observations
+                .async_stream()
+                .map(|m| m.ok().map(|(o, _)| Incoming::Observation(Box::new(o)))),
+            futures::stream::select(
+                rewards
+                    .async_stream()
+                    .map(|m| m.ok().map(|(r, _)| Incoming::Reward(r))),
+                statuses
+                    .async_stream()
+                    .map(|m| m.ok().map(|(s, _)| Incoming::Status(s))),
+            ),
+        );
+        let mut incoming = std::pin::pin!(incoming);
         let mut seen = Received::default();
         for (t, &task) in plan.tasks.iter().enumerate() {
             if t > 0 {
@@ -208,7 +220,8 @@ pub fn drive(
                 } else {
                     STEP_TIMEOUT
                 };
-                let reply = call_reset(&reset, seed, timeout, suite).await?;
+                let reply =
+                    start_episode(&reset, seed, timeout, suite, &mut seen, &mut incoming).await?;
                 let first = twin.reset(seed).map_err(|e| e.to_string())?;
                 let mut outcome = EpisodeOutcome {
                     task,
@@ -225,7 +238,6 @@ pub fn drive(
                 };
                 let mut policy = Policy::new(plan.policy, task, seed, &twin);
                 let started = Instant::now();
-                seen.clear();
                 loop {
                     let (joints, finger) = policy.act(&twin)?;
                     // The gripper rides in the same message (a finger joint target), so arm and
@@ -250,18 +262,13 @@ pub fn drive(
                         })
                         .map_err(|e| e.to_string())?;
                     let key = (reply.episode, twin.steps());
-                    let deadline = Instant::now() + STEP_TIMEOUT;
-                    while !seen.complete(key) {
-                        let remaining = deadline.saturating_duration_since(Instant::now());
-                        futures::select! {
-                            o = observation_stream.select_next_some() => if let Ok((o, _)) = o { seen.observations.insert((o.episode, o.step), o); },
-                            r = reward_stream.select_next_some() => if let Ok((r, _)) = r { seen.rewards.insert((r.episode, r.step), r); },
-                            s = status_stream.select_next_some() => if let Ok((s, _)) = s { seen.statuses.insert((s.episode, s.step), s); },
-                            _ = FutureExt::fuse(smol::Timer::after(remaining)) => {
-                                return Err(format!("no observation/reward/episode for step {} within {:?}{}",
-                                    key.1, STEP_TIMEOUT, suite.died().map(|d| format!(" ({d})")).unwrap_or_default()));
-                            }
-                        }
+                    if !seen.wait_for(key, &mut incoming, STEP_TIMEOUT).await {
+                        return Err(format!(
+                            "no observation/reward/episode for step {} within {:?}{}",
+                            key.1,
+                            STEP_TIMEOUT,
+                            suite.died().map(|d| format!(" ({d})")).unwrap_or_default()
+                        ));
                     }
                     let (o, r, s) = seen.take(key);
                     outcome.identical &= bits(&o.flat) == bits(&step.observation.flat())
@@ -328,6 +335,13 @@ fn wait_for_recorder(node: &RosNode, namespace: &str, suite: &mut Suite) -> Resu
     }
 }
 
+/// A message on one of the three step topics.
+enum Incoming {
+    Observation(Box<msg::Observation>),
+    Reward(msg::StagedReward),
+    Status(msg::EpisodeStatus),
+}
+
 /// Messages received, by (episode, step), until their step is complete.
 #[derive(Default)]
 struct Received {
@@ -354,11 +368,74 @@ impl Received {
         )
     }
 
-    fn clear(&mut self) {
-        self.observations.clear();
-        self.rewards.clear();
-        self.statuses.clear();
+    /// Drop what belongs to other episodes than `episode`.
+    fn keep_episode(&mut self, episode: u32) {
+        self.observations.retain(|k, _| k.0 == episode);
+        self.rewards.retain(|k, _| k.0 == episode);
+        self.statuses.retain(|k, _| k.0 == episode);
     }
+
+    fn insert(&mut self, message: Incoming) {
+        match message {
+            Incoming::Observation(o) => _ = self.observations.insert((o.episode, o.step), *o),
+            Incoming::Reward(r) => _ = self.rewards.insert((r.episode, r.step), r),
+            Incoming::Status(s) => _ = self.statuses.insert((s.episode, s.step), s),
+        }
+    }
+
+    /// Receive until the messages of `key` are all here (true) or `timeout` passed (false).
+    async fn wait_for(
+        &mut self,
+        key: (u32, u32),
+        incoming: &mut (impl futures::Stream<Item = Option<Incoming>> + Unpin),
+        timeout: Duration,
+    ) -> bool {
+        let deadline = Instant::now() + timeout;
+        while !self.complete(key) {
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            futures::select! {
+                message = incoming.next().fuse() => match message {
+                    Some(Some(message)) => self.insert(message),
+                    Some(None) => {} // an unreadable sample
+                    None => return false,
+                },
+                _ = FutureExt::fuse(smol::Timer::after(remaining)) => return false,
+            }
+        }
+        true
+    }
+}
+
+/// How long the step-0 messages of a reset may take before the reset is asked again.
+const STEP0_WAIT: Duration = Duration::from_secs(1);
+/// Resets asked (same seed: the same start) before giving up on the step-0 messages.
+const RESET_ATTEMPTS: usize = 5;
+
+/// Reset with `seed` and wait for the episode's step-0 observation, reward and status: their
+/// arrival shows each writer knows this agent's reader (a volatile step message sent before
+/// that is lost, which happens right after discovery). Without them, reset again.
+async fn start_episode(
+    client: &ros2_client::dds::Client<srv::ResetRequest, srv::ResetResponse>,
+    seed: u64,
+    timeout: Duration,
+    suite: &mut Suite,
+    seen: &mut Received,
+    incoming: &mut (impl futures::Stream<Item = Option<Incoming>> + Unpin),
+) -> Result<srv::ResetResponse, String> {
+    for _ in 0..RESET_ATTEMPTS {
+        let reply = call_reset(client, seed, timeout, suite).await?;
+        seen.keep_episode(reply.episode);
+        let key = (reply.episode, 0);
+        if seen.wait_for(key, incoming, STEP0_WAIT).await {
+            seen.take(key);
+            return Ok(reply);
+        }
+    }
+    Err(format!(
+        "{RESET_ATTEMPTS} resets with seed {seed}, and the step-0 observation, reward and episode status \
+         never all arrived{}",
+        suite.died().map(|d| format!(" ({d})")).unwrap_or_default()
+    ))
 }
 
 /// Send a request, resending every second until `timeout` (the first call may go out before

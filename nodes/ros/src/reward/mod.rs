@@ -1,6 +1,7 @@
 //! The `reward` node: for every `world_state` of a step, the objective's staged reward (the
 //! core library's functions) on `reward`, stamped like the world state it came from, and the
-//! success flag on `success`. The objective and object come from the latched `scene`.
+//! success flag on `success`. The objective and object come from the latched `scene`. The
+//! reset state (step 0) gets a reward message too, with total 0 and no `success`.
 
 use composuite_core::TaskSpec;
 use composuite_core::reward::{RewardConfig, staged_reward};
@@ -71,9 +72,18 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let mut early: Vec<msg::WorldState> = Vec::new();
     let score = |task: TaskSpec, w: &msg::WorldState| {
         let r = staged_reward(task.objective, task.object, &convert::snapshot(w));
-        let message =
+        let mut message =
             convert::staged_reward(&r, &config.get(), w.header.stamp.clone(), w.episode, w.step);
         // Publishing only fails when DDS is shutting down.
+        if w.step == 0 {
+            // The reset state: no action was taken, so it earns nothing, but the message is
+            // sent (its stages show where the episode starts) so that an agent knows at the
+            // reset that this writer reaches it, before step 1's reward depends on that.
+            message.total = 0.0;
+            message.success = false;
+            let _ = reward_pub.publish(message);
+            return;
+        }
         let _ = reward_pub.publish(message);
         let _ = success_pub.publish(Bool { data: r.success });
     };
@@ -113,10 +123,6 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                 },
                 world = worlds.select_next_some() => match world {
                     Ok((w, _)) => {
-                        // Step 0 is the reset state: no action was taken, so no reward.
-                        if w.step == 0 {
-                            continue;
-                        }
                         match current {
                             Some((task, episode)) if w.episode == episode => score(task, &w),
                             Some((_, episode)) if w.episode < episode => {}

@@ -282,9 +282,10 @@ impl TaskManager {
 
     /// Close the current episode, if it is still running, with `reason`.
     fn end_current(&mut self, reason: u8, text: &str) {
+        // An episode whose start was announced (its step-0 status) is announced ended too.
         if let Some(ep) = &mut self.current
             && !ep.done
-            && ep.last_step > 0
+            && (ep.started || ep.last_step > 0)
         {
             ep.done = true;
             let status = status_message(ep, reason, text, false, false);
@@ -465,6 +466,11 @@ impl TaskManager {
                 return;
             }
             ep.started = true;
+            // The episode's step-0 status: it is running. Sent at the reset so that an agent
+            // knows this writer reaches it before step 1's status depends on that.
+            ep.last_header = o.header.clone();
+            let status = status_message(ep, msg::EpisodeStatus::REASON_RUNNING, "", false, false);
+            let _ = self.status.publish(status);
         }
         let mut waiting = Vec::new();
         for p in self.pending.drain(..) {
