@@ -23,11 +23,19 @@ pub fn data_dir() -> PathBuf {
     }
 }
 
+pub mod numpy_random;
+
+/// A data file as JSON (`.json.gz` files are decompressed).
 fn load(file: &str) -> Value {
     let path = data_dir().join(file);
-    let reader = File::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let text = flate2::read::GzDecoder::new(BufReader::new(reader));
-    serde_json::from_reader(text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    let reader =
+        BufReader::new(File::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())));
+    let parsed = if file.ends_with(".gz") {
+        serde_json::from_reader(flate2::read::GzDecoder::new(reader))
+    } else {
+        serde_json::from_reader(reader)
+    };
+    parsed.unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn floats(v: &Value) -> Vec<f64> {
@@ -279,4 +287,67 @@ pub fn divergence(ours: &[f64], reference: &[f64]) -> Divergence {
         eef: distance(layout::EEF_POSITION),
         object: distance(layout::OBJECT_POSITION),
     }
+}
+
+/// One random-policy episode of the reference (`random_returns.json`).
+pub struct RandomEpisode {
+    /// `np.random.seed(seed)` before the reset; the actions come from `default_rng(1000 + seed)`.
+    pub seed: u32,
+    pub episode_return: f64,
+    /// Some step's reward was 1.
+    pub success: bool,
+    pub length: u32,
+    /// The episode's first action at full precision (checks [`numpy_random`]).
+    pub first_action: [f64; 8],
+}
+
+impl RandomEpisode {
+    /// The seed of the episode's action stream.
+    pub fn action_seed(&self) -> u32 {
+        1000 + self.seed
+    }
+}
+
+/// The random-policy episodes of one task.
+pub struct RandomTask {
+    pub task: TaskSpec,
+    pub episodes: Vec<RandomEpisode>,
+}
+
+/// The reference's random-policy episodes: 16 tasks × 10 episodes of up to 500 steps.
+pub fn random_returns() -> Vec<RandomTask> {
+    let data = load("random_returns.json");
+    data["tasks"]
+        .as_array()
+        .expect("tasks")
+        .iter()
+        .map(|t| RandomTask {
+            task: task(t),
+            episodes: t["episodes"]
+                .as_array()
+                .expect("episodes")
+                .iter()
+                .map(|e| RandomEpisode {
+                    seed: e["episode"].as_u64().expect("episode") as u32,
+                    episode_return: e["return"].as_f64().expect("return"),
+                    success: e["success_reward"].as_bool().expect("success_reward"),
+                    length: e["length"].as_u64().expect("length") as u32,
+                    first_action: floats(&e["first_action"])
+                        .try_into()
+                        .expect("8 action values"),
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The port's run of a random-policy episode: (return, success, length).
+pub fn random_episode(task: TaskSpec, episode: &RandomEpisode) -> (f64, bool, u32) {
+    let mut env = Env::new(task, EnvConfig::default());
+    env.reset(episode.seed as u64).expect("reset");
+    let mut rng = numpy_random::DefaultRng::new(episode.action_seed());
+    while env.ended().is_none() {
+        env.step(&Action::Reference(rng.action())).expect("step");
+    }
+    (env.episode_return(), env.success_seen(), env.steps())
 }
