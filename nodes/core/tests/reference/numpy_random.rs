@@ -17,15 +17,18 @@ const POOL_SIZE: usize = 4;
 /// PCG64's LCG multiplier.
 const PCG_MULTIPLIER: u128 = 0x2360_ed05_1fc6_5da4_4385_df64_9fcc_f645;
 
+/// SeedSequence's hash step: the value mixed with the running constant, which advances by
+/// `multiplier` (MULT_A while the pool is filled, MULT_B while the state is drawn from it).
+fn hash(value: u32, constant: &mut u32, multiplier: u32) -> u32 {
+    let mut value = value ^ *constant;
+    *constant = constant.wrapping_mul(multiplier);
+    value = value.wrapping_mul(*constant);
+    value ^ (value >> XSHIFT)
+}
+
 /// The entropy pool of `SeedSequence(seed)` for a seed below 2³².
 fn seed_sequence_pool(seed: u32) -> [u32; POOL_SIZE] {
-    let mut hash_const = INIT_A;
-    let mut hashmix = |value: u32| {
-        let mut value = value ^ hash_const;
-        hash_const = hash_const.wrapping_mul(MULT_A);
-        value = value.wrapping_mul(hash_const);
-        value ^ (value >> XSHIFT)
-    };
+    let mut constant = INIT_A;
     let mix = |x: u32, y: u32| {
         let r = MIX_MULT_L
             .wrapping_mul(x)
@@ -35,12 +38,12 @@ fn seed_sequence_pool(seed: u32) -> [u32; POOL_SIZE] {
     let entropy = [seed];
     let mut pool = [0u32; POOL_SIZE];
     for (i, slot) in pool.iter_mut().enumerate() {
-        *slot = hashmix(entropy.get(i).copied().unwrap_or(0));
+        *slot = hash(entropy.get(i).copied().unwrap_or(0), &mut constant, MULT_A);
     }
     for src in 0..POOL_SIZE {
         for dst in 0..POOL_SIZE {
             if src != dst {
-                let hashed = hashmix(pool[src]);
+                let hashed = hash(pool[src], &mut constant, MULT_A);
                 pool[dst] = mix(pool[dst], hashed);
             }
         }
@@ -51,14 +54,8 @@ fn seed_sequence_pool(seed: u32) -> [u32; POOL_SIZE] {
 /// `SeedSequence(seed).generate_state(4, uint64)`.
 fn generate_state(seed: u32) -> [u64; 4] {
     let pool = seed_sequence_pool(seed);
-    let mut hash_const = INIT_B;
-    let mut words = [0u32; 8];
-    for (i, word) in words.iter_mut().enumerate() {
-        let mut value = pool[i % POOL_SIZE] ^ hash_const;
-        hash_const = hash_const.wrapping_mul(MULT_B);
-        value = value.wrapping_mul(hash_const);
-        *word = value ^ (value >> XSHIFT);
-    }
+    let mut constant = INIT_B;
+    let words: [u32; 8] = std::array::from_fn(|i| hash(pool[i % POOL_SIZE], &mut constant, MULT_B));
     std::array::from_fn(|k| words[2 * k] as u64 | (words[2 * k + 1] as u64) << 32)
 }
 

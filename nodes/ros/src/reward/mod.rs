@@ -74,18 +74,19 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         let r = staged_reward(task.objective, task.object, &convert::snapshot(w));
         let mut message =
             convert::staged_reward(&r, &config.get(), w.header.stamp.clone(), w.episode, w.step);
-        // Publishing only fails when DDS is shutting down.
-        if w.step == 0 {
-            // The reset state: no action was taken, so it earns nothing, but the message is
-            // sent (its stages show where the episode starts) so that an agent knows at the
-            // reset that this writer reaches it, before step 1's reward depends on that.
+        // The reset state (step 0): no action was taken, so it earns nothing, but the message
+        // is sent (its stages show where the episode starts) so that an agent knows at the
+        // reset that this writer reaches it, before step 1's reward depends on that.
+        let reset_state = w.step == 0;
+        if reset_state {
             message.total = 0.0;
             message.success = false;
-            let _ = reward_pub.publish(message);
-            return;
         }
+        // Publishing only fails when DDS is shutting down.
         let _ = reward_pub.publish(message);
-        let _ = success_pub.publish(Bool { data: r.success });
+        if !reset_state {
+            let _ = success_pub.publish(Bool { data: r.success });
+        }
     };
     smol::block_on(async {
         let mut scenes = std::pin::pin!(scene_sub.async_stream());
