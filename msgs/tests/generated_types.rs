@@ -1,5 +1,6 @@
 //! The generated types against their sources: the .msg files, Jazzy's type hashes, the
-//! rosbag2 definition layout, the observation layout of the facts sheet, and round trips.
+//! rosbag2 definition layout, the reference's observation layout
+//! (docs/reference-facts.md §5), and round trips.
 
 mod support;
 
@@ -165,7 +166,7 @@ fn names_follow_ros_2_conventions() {
 fn jazzy_type_hashes_pinned() {
     use composuite_msgs::{
         builtin_interfaces, control_msgs, controller_manager_msgs, geometry_msgs, rcl_interfaces,
-        rosgraph_msgs, sensor_msgs, service_msgs, std_msgs, trajectory_msgs,
+        rosgraph_msgs, sensor_msgs, service_msgs, std_msgs, trajectory_msgs, visualization_msgs,
     };
     let pins = [
         (
@@ -280,6 +281,35 @@ fn jazzy_type_hashes_pinned() {
             <controller_manager_msgs::srv::ListHardwareInterfaces as composuite_msgs::RosService>::TYPE_HASH,
             "c3e561a6e8cc7b9d577d8065c783038e51f6950cbe9bed67fb117a3e2e04d8f1",
         ),
+        // The scene as markers (`scene_markers`, `object_markers`): visualization_msgs 5.3.6.
+        (
+            visualization_msgs::msg::MarkerArray::TYPE_HASH,
+            "86cb8800b6fb05b5eff1abd7a56f62a5641d3ae9a1c29e78e67e704f1d067dcf",
+        ),
+        (
+            visualization_msgs::msg::Marker::TYPE_HASH,
+            "45b13ccf791f225962bf74e746f9644518855d783a6f42ba0cc14fde2b4f3ce0",
+        ),
+        (
+            visualization_msgs::msg::MeshFile::TYPE_HASH,
+            "7710ece15a148fb7c9b546364cfb215bb06098087bd6394fe5b73a493508f8c4",
+        ),
+        (
+            visualization_msgs::msg::UVCoordinate::TYPE_HASH,
+            "f27f7ed21fe360c6066944f856b801a0c0d1e94e815b6886444b42d90b196a26",
+        ),
+        (
+            sensor_msgs::msg::CompressedImage::TYPE_HASH,
+            "15640771531571185e2efc8a100baf923961a4d15d5569652e6cb6691e8e371a",
+        ),
+        (
+            std_msgs::msg::ColorRGBA::TYPE_HASH,
+            "77a7a5b9ae477306097665106e0413ba74440245b1f3d0c6d6405fe5c7813fe8",
+        ),
+        (
+            builtin_interfaces::msg::Duration::TYPE_HASH,
+            "e8d009f659816f758b75334ee1a9ca5b5c0b859843261f14c7f937349599d93b",
+        ),
         // `char[16]` hashes as uint8[16] in Jazzy.
         (
             service_msgs::msg::ServiceEventInfo::TYPE_HASH,
@@ -355,7 +385,7 @@ fn flat_len(desc: &TypeDescription) -> usize {
         .sum()
 }
 
-/// composuite-facts §5: object 14, obstacle 14, goal 17, task one-hots 4 x 4, robot 32;
+/// docs/reference-facts.md §5: object 14, obstacle 14, goal 17, task one-hots 4 x 4, robot 32;
 /// 93 with the task indicator, 77 without.
 #[test]
 fn observation_factors_have_the_reference_sizes() {

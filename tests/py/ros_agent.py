@@ -62,7 +62,8 @@ PRIMITIVE_DEFAULTS = {"bool": False, "float32": 0.0, "float64": 0.0, "string": "
 # What rosidl adds to a struct without fields, so that it has a size (an empty service request).
 EMPTY_STRUCT_MEMBER = "structure_needs_at_least_one_member"
 
-# The two members rmw_cyclonedds puts in front of every request and reply (§5.2 of the facts).
+# The two members rmw_cyclonedds puts in front of every request and reply (its request/reply
+# header, read in rmw_cyclonedds' Jazzy serdata code: the client's GUID and a sequence number).
 CYCLONE_HEADER = (("client_guid", idl.uint64), ("seq", idl.int64))
 
 

@@ -139,8 +139,9 @@ def test_cyclone_service_types_put_the_16_byte_header_before_the_ros_fields(type
 
 
 def test_the_header_layout_matches_the_one_measured_against_cyclonedds():
-    """The bytes the reference facts (§5.2) record for guid 0x1122334455667788, seq 5 and an
-    empty request, rebuilt with a struct that has the ROS filler member of empty types."""
+    """The bytes rmw_cyclonedds puts on the wire for guid 0x1122334455667788, seq 5 and an
+    empty request (as measured against cyclonedds), rebuilt with a struct that has the ROS
+    filler member of empty types."""
     types = ros_agent.TypeRegistry({"test_msgs/srv/Empty_Request": "", "test_msgs/srv/Empty_Response": ""})
     request, _ = types.cyclone_service("test_msgs/srv/Empty")
     encoded = request(client_guid=0x1122334455667788, seq=5).serialize()
@@ -285,7 +286,8 @@ def test_best_effort_clock_reaches_a_best_effort_subscriber(domain):
 
 
 def test_a_reliable_subscriber_does_not_match_a_best_effort_publisher(domain):
-    """The ROS QoS rule that bites (facts §1.4): the library must not paper over it."""
+    """The ROS QoS rule that bites (a reliable reader never matches a best-effort writer): the
+    library must not paper over it."""
     with Agent("/", domain_id=domain) as sim, Agent("/", domain_id=domain) as agent:
         clock = sim.publisher("clock", "rosgraph_msgs/msg/Clock", "clock")
         subscription = agent.subscribe("clock", "rosgraph_msgs/msg/Clock", "state")

@@ -1,9 +1,10 @@
 """`composuite tasks --split ...` against CPython itself.
 
 The reference benchmark draws its train/test splits with CPython's global `random` module
-(composuite-facts §7.2). Here that algorithm is written out in Python from the facts sheet, run
-with CPython's own `random`, and its lists (reference names mapped to wire names) must equal the
-JSON of the `composuite` binary for many seeds, every experiment, several elements and sizes.
+(docs/reference-facts.md §7.2). Here that algorithm is written out in Python from that
+description, run with CPython's own `random`, and its lists (reference names mapped to wire names)
+must equal the JSON of the `composuite` binary for many seeds, every experiment, several elements
+and sizes.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-//! Observations, factored as the reference benchmark factors them (composuite-facts §5): object,
-//! obstacle, goal, task one-hots and robot proprioception, plus the flat vector its Gym wrapper
-//! produces (93 values with the task indicator, 77 without). Quaternions are (x, y, z, w).
+//! Observations, factored as the reference benchmark factors them (docs/reference-facts.md §5):
+//! object, obstacle, goal, task one-hots and robot proprioception, plus the flat vector its Gym
+//! wrapper produces (93 values with the task indicator, 77 without). Quaternions are (x, y, z, w).
 
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 

@@ -14,7 +14,7 @@ fn env(task: &str) -> Env {
     Env::new(task.parse().unwrap(), EnvConfig::default())
 }
 
-/// Object starts computed with numpy's own generator, following composuite-facts §7.3's draw
+/// Object starts computed with numpy's own generator, following docs/reference-facts.md §7.3's draw
 /// order (7 normals; 2 obstacle uniforms if any; x, y per attempt with rejection).
 #[test]
 fn starts_match_numpy_for_the_same_seed() {
@@ -98,7 +98,7 @@ fn observation_layout_matches_the_reference() {
     let obs = e.reset(3).unwrap();
     let flat = obs.flat();
     assert_eq!(flat.len(), FLAT_SIZE_WITH_TASK);
-    // Index ranges (composuite-facts §5): object 0-13, obstacle 14-27, goal 28-44, one-hots
+    // Index ranges (docs/reference-facts.md §5): object 0-13, obstacle 14-27, goal 28-44, one-hots
     // 45-60 (object, robot, obstacle, objective), proprio 61-92.
     assert_eq!(&flat[0..3], &obs.object.position);
     assert_eq!(&flat[14..17], &[0.0; 3], "no obstacle: position 0");
@@ -201,8 +201,9 @@ fn episodes_end_and_refuse_further_steps() {
     assert_eq!(e.steps(), 1);
 }
 
-/// Push ends as soon as the object is more than 10 cm above the bin top (facts §1): grasp the
-/// box through the environment's own actions (absolute targets from IK) and lift it.
+/// Push ends as soon as the object is more than 10 cm above the bin top
+/// (docs/reference-facts.md §1): grasp the box through the environment's own actions (absolute
+/// targets from IK) and lift it.
 #[test]
 fn push_terminates_when_the_object_is_lifted() {
     let mut e = env("Panda/box/no_obstacle/push");
@@ -295,8 +296,8 @@ fn same_seed_and_actions_give_bit_identical_trajectories() {
     }
 }
 
-/// composuite-facts §4.3: the reference's gripper command c starts at 0 with the fingers open,
-/// so with a[7] = 0 the fingers drift half closed; +1 closes them in 4 steps.
+/// docs/reference-facts.md §4.3: the reference's gripper command c starts at 0 with the fingers
+/// open, so with a[7] = 0 the fingers drift half closed; +1 closes them in 4 steps.
 #[test]
 fn reference_gripper_follows_the_sign_of_the_action() {
     let mut e = env("IIWA/box/no_obstacle/pick_place");

@@ -239,7 +239,7 @@ impl Env {
     }
 
     /// Start an episode: the arm at its initial pose with the gripper open, the object at the
-    /// start the reference draws for `seed` (numpy seeding, composuite-facts §2.2 and §7.3).
+    /// start the reference draws for `seed` (numpy seeding, docs/reference-facts.md §2.2 and §7.3).
     /// The physics starts from a fresh copy of the task's world, so an episode depends only on
     /// its seed and actions.
     pub fn reset(&mut self, seed: u64) -> Result<Observation, EnvError> {

@@ -12,7 +12,7 @@ mod world;
 pub use params::{ArmGains, GripperParams, PhysicsParams};
 pub use robot_model::{
     BodyModel, CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, JointModel,
-    ModelError, RobotModel, Shape, build_model, robot_description, robot_model,
+    LinkJoint, ModelError, RobotModel, Shape, build_model, robot_description, robot_model,
 };
 pub use tags::{ColliderTag, Side};
 pub use world::{

@@ -54,8 +54,8 @@ pub struct ArmGains {
 impl ArmGains {
     /// The gains used for `robot`.
     pub fn for_robot(robot: Robot) -> ArmGains {
-        // Reference joint damping (composuite-facts §4.1): 0.1 everywhere on the iiwa, 0.01 on the
-        // two wrist joints of the other arms.
+        // Reference joint damping (docs/reference-facts.md §4.1): 0.1 everywhere on the iiwa, 0.01
+        // on the two wrist joints of the other arms.
         let damping = match robot {
             Robot::Iiwa => [0.1; 7],
             Robot::Jaco | Robot::Gen3 | Robot::Panda => [0.1, 0.1, 0.1, 0.1, 0.1, 0.01, 0.01],

@@ -126,6 +126,22 @@ pub struct RobotModel {
     pub joints: Vec<JointModel>,
     /// Every URDF link: (body index, pose of the link frame in the body frame).
     pub links: HashMap<String, (usize, Isometry3<f64>)>,
+    /// Every URDF joint, fixed ones included, parents before children: the link tree as
+    /// robot_state_publisher walks it (one `tf` transform per entry).
+    pub tree: Vec<LinkJoint>,
+}
+
+/// One joint of the URDF link tree, moving or fixed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkJoint {
+    /// URDF joint name.
+    pub name: String,
+    /// Parent link.
+    pub parent: String,
+    /// Child link.
+    pub child: String,
+    /// Whether the joint is fixed (its child is merged into the parent's body).
+    pub fixed: bool,
 }
 
 /// A URDF that does not describe what the loader needs.
@@ -265,6 +281,7 @@ fn merge(
         bodies: Vec::new(),
         joints: Vec::new(),
         links: HashMap::new(),
+        tree: Vec::new(),
     };
     let mut accumulators: Vec<MassAccumulator> = Vec::new();
     // Depth-first from the root, parents before children, children in file order. A link
@@ -328,6 +345,13 @@ fn merge(
                 pose: link_in_body * urdf_pose(&collision.origin),
             });
         }
+        let own_joints = children.get(name).map(Vec::as_slice).unwrap_or_default();
+        model.tree.extend(own_joints.iter().map(|joint| LinkJoint {
+            name: joint.name.clone(),
+            parent: name.to_string(),
+            child: joint.child.link.clone(),
+            fixed: joint.joint_type == urdf_rs::JointType::Fixed,
+        }));
         // Push children in reverse so they pop in file order.
         for joint in children
             .get(name)

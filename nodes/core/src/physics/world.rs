@@ -35,7 +35,7 @@ pub enum GripperCommand {
 }
 
 /// The pad gap at finger position `q_left` (fingers coupled, q_right = −q_left):
-/// 0.0371 m at q = 0 (arm-facts, rethink_gripper.geometry_summary).
+/// 0.0371 m at q = 0 (docs/reference-facts.md §4.4).
 pub fn pad_gap(q_left: f64) -> f64 {
     PAD_GAP_AT_ZERO + 2.0 * q_left
 }
@@ -55,8 +55,8 @@ pub enum ServoMode {
     /// limit: how a real arm's driver tracks absolute position commands.
     #[default]
     Stiff,
-    /// The reference benchmark's joint controller (composuite-facts §4.2): a PD with kp 50 and
-    /// damping ratio 1 scaled by each joint's inertia (the diagonal of the joint-space mass
+    /// The reference benchmark's joint controller (docs/reference-facts.md §4.2): a PD with kp 50
+    /// and damping ratio 1 scaled by each joint's inertia (the diagonal of the joint-space mass
     /// matrix, armature included), so agents trained on the reference see the same soft,
     /// slow-settling response. No set-point rate limit (the reference has none).
     Reference,
@@ -79,7 +79,7 @@ pub struct FingerContacts {
 }
 
 impl FingerContacts {
-    /// The benchmark's grasp test (composuite-facts §6): both pads touch the object; for the
+    /// The benchmark's grasp test (docs/reference-facts.md §6): both pads touch the object; for the
     /// plate, one pad and any part of the other finger suffice.
     pub fn grasping(&self, object: Object) -> bool {
         match object {
@@ -783,7 +783,7 @@ impl SimWorld {
     }
 }
 
-/// The fully open finger position (m), where every episode starts (arm-facts init_qpos).
+/// The fully open finger position (m), where every episode starts (docs/reference-facts.md §4.4).
 pub const FINGER_OPEN: f64 = 0.020833;
 
 fn coordinate_axis(kind: JointKind) -> usize {
