@@ -12,7 +12,7 @@ use support::fuzz;
 #[global_allocator]
 static ALLOCATOR: fuzz::CountingAlloc = fuzz::CountingAlloc;
 
-/// Inputs per type in CI: 37 types x 3000, each decoded twice (ours and plain cdr-encoding),
+/// Inputs per type in CI: 72 types x 3000, each decoded twice (ours and plain cdr-encoding),
 /// a few seconds in the dev profile.
 const CI_INPUTS_PER_TYPE: u64 = 3000;
 

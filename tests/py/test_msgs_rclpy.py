@@ -20,7 +20,7 @@ PER_TYPE = 20
 # those two types are covered by the rosbags tests).
 JAZZY_PACKAGES = {
     "builtin_interfaces", "std_msgs", "geometry_msgs", "sensor_msgs", "rosgraph_msgs", "service_msgs",
-    "composuite_msgs",
+    "visualization_msgs", "composuite_msgs",
 }
 
 
@@ -114,3 +114,7 @@ def test_type_hashes_equal_jazzy_generator_output(described):
     # every composuite type (12 msgs, 3 services with request/response/event) and the standard ones
     assert sum(n.startswith("composuite_msgs/") for n in compared) == 12 + 3 * 4
     assert len(compared) >= 24 + 13
+    # the scene markers' types, against the ros-jazzy-visualization-msgs wheel
+    assert {"visualization_msgs/msg/MarkerArray", "visualization_msgs/msg/Marker", "visualization_msgs/msg/MeshFile",
+            "visualization_msgs/msg/UVCoordinate", "sensor_msgs/msg/CompressedImage",
+            "std_msgs/msg/ColorRGBA"} <= set(compared)

@@ -56,6 +56,8 @@ TOPICS = {
     "tf": ("tf2_msgs/msg/TFMessage", "publication", STATE),
     "robot_description": ("std_msgs/msg/String", "publication", LATCHED),
     "tf_static": ("tf2_msgs/msg/TFMessage", "publication", LATCHED),
+    "scene_markers": ("visualization_msgs/msg/MarkerArray", "publication", LATCHED),
+    "object_markers": ("visualization_msgs/msg/MarkerArray", "publication", STATE),
 }
 SERVICES = {"set_task": "SetTask", "reset": "Reset", "sample_tasks": "SampleTasks"}
 FINGERS = ["l_finger_joint", "r_finger_joint"]

@@ -51,6 +51,8 @@ TOPICS = {
     "tf": "tf2_msgs/msg/TFMessage",
     "robot_description": "std_msgs/msg/String",
     "tf_static": "tf2_msgs/msg/TFMessage",
+    "scene_markers": "visualization_msgs/msg/MarkerArray",
+    "object_markers": "visualization_msgs/msg/MarkerArray",
 }
 SERVICES = {"set_task": "composuite_msgs/srv/SetTask", "reset": "composuite_msgs/srv/Reset",
             "sample_tasks": "composuite_msgs/srv/SampleTasks"}

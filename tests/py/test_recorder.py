@@ -28,7 +28,7 @@ TASK = "IIWA/box/no_obstacle/pick_place"
 NS = "/rec"
 # Every topic an environment has, and the agent's command topic.
 ENV_TOPICS = ["clock", "episode", "joint_states", "observation", "reward", "robot_description", "scene",
-              "success", "tf", "tf_static", "world_state", "joint_command"]
+              "success", "tf", "tf_static", "world_state", "scene_markers", "object_markers", "joint_command"]
 EPISODES = [(3, 40), (4, 30)]  # (seed, steps)
 
 
@@ -148,9 +148,11 @@ def test_every_message_the_publishers_sent_is_in_the_bag(session):
     observations = stamped_after([m for _, m in recorded[f"{NS}/observation"]], since)
     assert len(observations) == commands + len(EPISODES)
     assert [(o.episode, o.step) for o in observations][:3] == [(observations[0].episode, k) for k in range(3)]
-    for topic in ("joint_states", "world_state", "tf"):
+    for topic in ("joint_states", "world_state", "tf", "object_markers"):
         msgs = [m for _, m in recorded[f"{NS}/{topic}"]]
-        stamps = [ns_of(m.transforms[0].header.stamp) if topic == "tf" else ns_of(m.header.stamp) for m in msgs]
+        stamps = [ns_of(m.transforms[0].header.stamp) if topic == "tf"
+                  else ns_of(m.markers[0].header.stamp) if topic == "object_markers"
+                  else ns_of(m.header.stamp) for m in msgs]
         assert len([s for s in stamps if s >= since]) == commands + len(EPISODES), topic
     rewards = stamped_after([m for _, m in recorded[f"{NS}/reward"]], since)
     assert [(r.episode, r.step) for r in rewards] == [
@@ -195,6 +197,13 @@ def test_metadata_records_each_topics_offered_qos(session):
     assert list(profile) == ["history", "depth", "reliability", "durability", "deadline", "lifespan",
                              "liveliness", "liveliness_lease_duration", "avoid_ros_namespace_conventions"]
     assert (profile["reliability"], profile["durability"]) == ("reliable", "transient_local")
+    for latched in ("robot_description", "tf_static", "scene_markers"):
+        (offered,) = topics[f"{NS}/{latched}"]["offered_qos_profiles"]
+        assert (offered["reliability"], offered["durability"]) == ("reliable", "transient_local"), latched
+    for volatile in ("tf", "object_markers"):
+        (offered,) = topics[f"{NS}/{volatile}"]["offered_qos_profiles"]
+        assert (offered["reliability"], offered["durability"]) == ("reliable", "volatile"), volatile
+    assert topics[f"{NS}/scene_markers"]["type"] == "visualization_msgs/msg/MarkerArray"
     clock = topics[f"{NS}/clock"]["offered_qos_profiles"][0]
     assert (clock["reliability"], clock["durability"]) == ("best_effort", "volatile")
     assert profile["deadline"] == {"sec": 9223372036, "nsec": 854775807}

@@ -297,8 +297,9 @@ pub fn drive(
 }
 
 /// Until a recorder reads the environment's topics: topics only a recorder subscribes to
-/// (`clock`, `joint_states`, `success`, `tf`) have a reader, and `joint_command` has two (the
-/// sim and the recorder); then a moment for the readers to match their writers.
+/// (`clock`, `joint_states`, `success`, `tf`, `object_markers`) have a reader, and
+/// `joint_command` has two (the sim and the recorder); then a moment for the readers to match
+/// their writers.
 fn wait_for_recorder(node: &RosNode, namespace: &str, suite: &mut Suite) -> Result<(), String> {
     let ns = namespace.trim_end_matches('/');
     let wanted = [
@@ -306,6 +307,7 @@ fn wait_for_recorder(node: &RosNode, namespace: &str, suite: &mut Suite) -> Resu
         (names::JOINT_STATES, 1),
         (names::SUCCESS, 1),
         (names::TF, 1),
+        (names::OBJECT_MARKERS, 1),
         (names::JOINT_COMMAND, 2),
     ];
     let participant = node.context.domain_participant();

@@ -68,7 +68,8 @@ const SIM: NodeSpec = NodeSpec {
     binary: "sim_node",
     about: "CompoSuite-ROS sim node: owns the physics world of one environment; steps it on \
             joint_command or reference_action (lockstep) or on the wall clock (realtime); \
-            publishes joint_states, observation, world_state, clock, tf and robot_description.",
+            publishes joint_states, observation, world_state, clock, tf (every link), \
+            tf_static, robot_description, scene_markers and object_markers.",
     params: crate::sim::PARAMS,
 };
 

@@ -490,4 +490,50 @@ mod description_tests {
             assert!(urdf.links.iter().any(|l| l.name == GRIPPER_ROOT_LINK));
         }
     }
+
+    /// The link tree holds every joint of `robot_description`, each link but the root once as a
+    /// child, and a parent before its children.
+    #[test]
+    fn the_link_tree_is_robot_descriptions_joints_parents_first() {
+        for robot in Robot::all() {
+            let urdf = urdf_rs::read_from_string(&robot_description(robot)).unwrap();
+            let model = robot_model(robot);
+            let mut ours: Vec<(&str, &str, &str, bool)> = model
+                .tree
+                .iter()
+                .map(|j| {
+                    (
+                        j.name.as_str(),
+                        j.parent.as_str(),
+                        j.child.as_str(),
+                        j.fixed,
+                    )
+                })
+                .collect();
+            let mut theirs: Vec<(&str, &str, &str, bool)> = urdf
+                .joints
+                .iter()
+                .map(|j| {
+                    let fixed = matches!(j.joint_type, urdf_rs::JointType::Fixed);
+                    (
+                        j.name.as_str(),
+                        j.parent.link.as_str(),
+                        j.child.link.as_str(),
+                        fixed,
+                    )
+                })
+                .collect();
+            let root = &model.bodies[0].name;
+            let mut reached = vec![root.as_str()];
+            for j in &model.tree {
+                assert!(reached.contains(&j.parent.as_str()), "{robot:?}: {j:?}");
+                assert!(!reached.contains(&j.child.as_str()), "{robot:?}: {j:?}");
+                reached.push(&j.child);
+            }
+            assert_eq!(reached.len(), urdf.links.len(), "{robot:?}");
+            ours.sort();
+            theirs.sort();
+            assert_eq!(ours, theirs, "{robot:?}");
+        }
+    }
 }

@@ -34,11 +34,18 @@ pub const SAMPLE_TASKS: &str = "sample_tasks";
 pub const WORLD_FRAME: &str = "world";
 /// The arm + gripper URDF (std_msgs/String), transient local, sim → RViz/Foxglove.
 pub const ROBOT_DESCRIPTION: &str = "robot_description";
-/// Transforms of the gripper, object and goal frames in the world (tf2_msgs/TFMessage).
+/// Transforms (tf2_msgs/TFMessage), every step: every URDF link in its parent link, as
+/// robot_state_publisher would publish them, and the `eef`, `object` and `goal` frames in the
+/// world.
 pub const TF: &str = "tf";
-/// The arm's base in the world (tf2_msgs/TFMessage), transient local like tf2's `/tf_static`:
-/// with `robot_description` and `joint_states` (robot_state_publisher) it places the arm.
+/// The arm's root link in the world (tf2_msgs/TFMessage), transient local like tf2's
+/// `/tf_static`: with `tf` it places every link of `robot_description`.
 pub const TF_STATIC: &str = "tf_static";
+/// The arena as markers (visualization_msgs/MarkerArray), transient local: bins, obstacle,
+/// trash can or shelf, goal marker; re-published (after a DELETEALL) when the task changes.
+pub const SCENE_MARKERS: &str = "scene_markers";
+/// The object as markers (visualization_msgs/MarkerArray), volatile, every step at its pose.
+pub const OBJECT_MARKERS: &str = "object_markers";
 /// `tf` frame of the grip site (position) with the hand's orientation: the reference's eef.
 pub const EEF_FRAME: &str = "eef";
 /// `tf` frame of the object's body origin.

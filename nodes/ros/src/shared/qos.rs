@@ -18,8 +18,8 @@ pub fn state() -> QosProfile {
         })
 }
 
-/// Latched configuration (`scene`, `robot_description`): reliable, transient local, keep last 1,
-/// so a late joiner gets the current value.
+/// Latched configuration (`scene`, `robot_description`, `tf_static`, `scene_markers`): reliable,
+/// transient local, keep last 1, so a late joiner (a recorder, RViz) gets the current value.
 pub fn latched() -> QosProfile {
     state()
         .durability(Durability::TransientLocal)

@@ -18,8 +18,10 @@
 //!   itself, one period per update, until it is decided; nothing else advances it. `realtime`
 //!   mode: a wall-clock timer steps with the last command held and running goals updated;
 //! - after every step (and at reset): `world_state` first (the reward node's input), then
-//!   `observation`, `joint_states`, `tf`, `clock`, all stamped with the new sim time; when the
-//!   robot changes, the latched `robot_description` and `tf_static` (world → the arm's root link).
+//!   `observation`, `joint_states`, `tf` (every URDF link, and the eef, object and goal frames),
+//!   `object_markers`, `clock`, all stamped with the new sim time; when the task changes, the
+//!   latched `robot_description`, `tf_static` (world → the arm's root link) and `scene_markers`
+//!   (the arena) — see [`view`].
 //!
 //! Sim time never goes backwards: it advances one control period per step, and one per reset,
 //! so every stamp is unique within a run.
@@ -28,6 +30,7 @@ pub mod action_server;
 pub mod controllers;
 pub mod hardware;
 pub mod ros_control;
+pub mod view;
 
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
@@ -47,6 +50,7 @@ use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::std_msgs::msg::{Float64MultiArray, String as StringMsg};
 use composuite_msgs::tf2_msgs::msg::TFMessage;
 use composuite_msgs::trajectory_msgs::msg::JointTrajectory;
+use composuite_msgs::visualization_msgs::msg::MarkerArray;
 use futures::stream::FusedStream;
 use futures::{FutureExt, StreamExt};
 use ros2_client::action::{GoalId, GoalStatusEnum, SendGoalRequest};
@@ -146,6 +150,8 @@ struct Publishers {
     tf: Publisher<TFMessage>,
     tf_static: Publisher<TFMessage>,
     robot_description: Publisher<StringMsg>,
+    scene_markers: Publisher<MarkerArray>,
+    object_markers: Publisher<MarkerArray>,
 }
 
 type TrajectoryServer = ActionServer<
@@ -176,6 +182,8 @@ struct Running {
     clamp_reported: BTreeSet<String>,
     /// Whether "episode over" was already said for this episode.
     over_reported: bool,
+    /// Whether this episode's object markers went out yet (the first clears the old ones).
+    object_drawn: bool,
 }
 
 impl Running {
@@ -266,6 +274,12 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
             .map_err(e)?,
         robot_description: node
             .publisher(names::ROBOT_DESCRIPTION, qos::latched())
+            .map_err(e)?,
+        scene_markers: node
+            .publisher(names::SCENE_MARKERS, qos::latched())
+            .map_err(e)?,
+        object_markers: node
+            .publisher(names::OBJECT_MARKERS, qos::state())
             .map_err(e)?,
     };
     let scene_sub = node
@@ -606,12 +620,20 @@ impl Sim {
             controllers,
             clamp_reported: BTreeSet::new(),
             over_reported: false,
+            object_drawn: false,
         });
         if robot_changed {
             let _ = self.pubs.robot_description.publish(StringMsg {
                 data: robot_description(task.robot),
             });
-            // The URDF's root link sits at the robot base pose in the world.
+            // The URDF's root link sits at the robot base pose in the world. Only this one
+            // transform is static: robot_state_publisher would put the URDF's fixed joints here
+            // too, but the task (so the arm) can change during a run, and tf2's and Foxglove's
+            // static buffers keep a static transform for good, whichever arm sent it last
+            // (IIWA and Jaco both have a `right_hand_mount` from `link_7`, at other offsets). So
+            // the fixed joints go out on `tf` with the moving ones at every step, and every link
+            // resolves to `world` at every stamp from that step's transforms alone; the root
+            // links differ between the four arms, so their static transforms never clash.
             let root = &robot_model(task.robot).bodies[0].name;
             let base = convert::pose(&composuite_core::arena::robot_base_pose());
             let _ = self.pubs.tf_static.publish(TFMessage {
@@ -627,6 +649,14 @@ impl Sim {
             scene.episode, scene.seed
         ));
         self.advance_clock();
+        if robot_changed {
+            // The arena is the task's (the goal marker's place too): drawn again when it changes.
+            let stamp = convert::time_from_nanos(self.sim_time_ns);
+            let _ = self
+                .pubs
+                .scene_markers
+                .publish(view::arena_markers(scene, stamp));
+        }
         self.publish_state();
     }
 
@@ -1173,7 +1203,7 @@ impl Sim {
     /// Publish everything that describes the world now, stamped with the sim time: the
     /// episode's step (`world_state` first — the reward node's input — then `observation`),
     /// then the robot's state for ROS tools.
-    fn publish_state(&self) {
+    fn publish_state(&mut self) {
         let Some(run) = &self.run else { return };
         let env = &run.env;
         let stamp = convert::time_from_nanos(self.sim_time_ns);
@@ -1190,10 +1220,10 @@ impl Sim {
         self.publish_robot_state(&world_msg);
     }
 
-    /// `joint_states`, `tf` and `clock` (also while a realtime episode is over, so ROS tools
-    /// keep seeing a live robot).
-    fn publish_robot_state(&self, world_msg: &msg::WorldState) {
-        let Some(run) = &self.run else { return };
+    /// `joint_states`, `tf`, `object_markers` and `clock` (also while a realtime episode is over,
+    /// so ROS tools keep seeing a live robot).
+    fn publish_robot_state(&mut self, world_msg: &msg::WorldState) {
+        let Some(run) = &mut self.run else { return };
         let env = &run.env;
         let stamp = convert::time_from_nanos(self.sim_time_ns);
         let w = env.world();
@@ -1209,17 +1239,24 @@ impl Sim {
         ));
         let goal = env.goal();
         let goal_pose = convert::pose(&nalgebra::Isometry3::translation(goal.x, goal.y, goal.z));
-        let _ = self.pubs.tf.publish(TFMessage {
-            transforms: vec![
-                convert::world_transform(names::EEF_FRAME, &world_msg.eef_pose, stamp.clone()),
-                convert::world_transform(
-                    names::OBJECT_FRAME,
-                    &world_msg.object_pose,
-                    stamp.clone(),
-                ),
-                convert::world_transform(names::GOAL_FRAME, &goal_pose, stamp.clone()),
-            ],
-        });
+        let mut transforms = vec![
+            convert::world_transform(names::EEF_FRAME, &world_msg.eef_pose, stamp.clone()),
+            convert::world_transform(names::OBJECT_FRAME, &world_msg.object_pose, stamp.clone()),
+            convert::world_transform(names::GOAL_FRAME, &goal_pose, stamp.clone()),
+        ];
+        transforms.extend(view::link_transforms(w).iter().map(|link| {
+            view::transform_stamped(link.parent, link.child, &link.transform, stamp.clone())
+        }));
+        let _ = self.pubs.tf.publish(TFMessage { transforms });
+        if let Some(object_pose) = w.object_pose() {
+            let _ = self.pubs.object_markers.publish(view::object_markers(
+                env.task().object,
+                &object_pose,
+                stamp.clone(),
+                !run.object_drawn,
+            ));
+            run.object_drawn = true;
+        }
         let _ = self.pubs.clock.publish(Clock { clock: stamp });
     }
 }
