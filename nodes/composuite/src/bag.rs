@@ -1,7 +1,8 @@
 //! `composuite bag`: tools that read a recorded session from the bag alone — `info` (what
 //! `ros2 bag info` prints, plus the episodes found), `episodes` (the per-episode table
 //! recomputed from the recorded topics) and `reindex` (rebuild `metadata.yaml`, and the summary
-//! of a file whose recorder was killed, as `ros2 bag reindex` and `mcap recover` do).
+//! of a file whose recorder was killed, as `ros2 bag reindex` and `mcap recover` do); `play`
+//! publishes it into a running graph again, as `ros2 bag play` does.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -11,7 +12,8 @@ use composuite_msgs::{cdr, msg};
 use composuite_ros::bag::reader::{for_each_message, read_metadata, reindex};
 use serde_json::json;
 
-/// Read a recorded session from its bag alone: info, episodes, replay, export, reindex.
+/// Read a recorded session from its bag alone: info, episodes, replay, export, reindex; or
+/// play it back into a running ROS graph.
 ///
 /// Examples:
 ///   composuite bag info runs/s1/bag
@@ -19,6 +21,7 @@ use serde_json::json;
 ///   composuite bag replay runs/s1/bag --verify
 ///   composuite bag export runs/s1/bag --topics /ns/reward --format csv --out exported
 ///   composuite bag reindex runs/s1/bag
+///   composuite bag play runs/s1/bag --rate 2 --clock 100
 #[derive(Args, Debug)]
 pub struct BagArgs {
     #[command(subcommand)]
@@ -73,6 +76,31 @@ enum BagCommand {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Publish the recorded messages again, on their topics and with the QoS their publishers
+    /// offered (latched topics stay latched), at the recorded pace times --rate, as
+    /// `ros2 bag play` does. Speaks DDS on ROS_DOMAIN_ID (ROS_AUTOMATIC_DISCOVERY_RANGE as the
+    /// nodes); SIGINT/SIGTERM stop it.
+    Play {
+        /// The bag directory.
+        bag: PathBuf,
+        /// Speed factor: 2 = twice as fast as recorded, 0.5 = half as fast.
+        #[arg(long, short = 'r', default_value_t = 1.0)]
+        rate: f64,
+        /// Topics to play (full names); default: every topic.
+        #[arg(long, num_args = 1..)]
+        topics: Vec<String>,
+        /// Also publish /clock at this rate (Hz) with the bag's time (a recorded /clock is then
+        /// not played).
+        #[arg(long, value_name = "HZ")]
+        clock: Option<f64>,
+        /// Publish a topic under another name, FROM:=TO (e.g. /env_00/tf:=/tf for RViz).
+        #[arg(long, short = 'm', num_args = 1.., value_name = "FROM:=TO")]
+        remap: Vec<String>,
+        /// Seconds between creating the publishers and the first message, for subscribers to
+        /// discover them (volatile messages sent before a subscriber matched never reach it).
+        #[arg(long, default_value_t = 1.0)]
+        delay: f64,
+    },
     /// Rebuild metadata.yaml from the MCAP files (a bag whose recorder was killed has none);
     /// a file without its summary is first rewritten from its complete chunks.
     Reindex {
@@ -109,6 +137,14 @@ pub fn run(args: &BagArgs) -> Result<(), String> {
             format,
             out,
         } => crate::export::run(bag, topics, *format, out),
+        BagCommand::Play {
+            bag,
+            rate,
+            topics,
+            clock,
+            remap,
+            delay,
+        } => crate::play::run(bag, *rate, topics, *clock, remap, *delay),
         BagCommand::Reindex { bag } => {
             let report = reindex(bag).map_err(|e| e.0)?;
             for (file, why) in &report.recovered {

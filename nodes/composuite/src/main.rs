@@ -9,6 +9,7 @@ mod drive;
 mod expert;
 mod export;
 mod launch;
+mod play;
 mod plots;
 mod replay;
 mod session;

@@ -5,6 +5,7 @@
 //! - [`task_manager`]: scenes, episodes, the task services;
 //! - [`reward`]: staged rewards and success;
 //! - [`recorder`]: records the wire into a rosbag2 bag;
+//! - [`player`]: plays a bag back into a running graph (`composuite bag play`);
 //! - [`nodes`]: the nodes by kind (specs and mains, for the binaries and `composuite launch`);
 //! - [`shared`]: start-up, parameters, logging, names, QoS, message conversions;
 //! - [`bag`]: rosbag2 bags in MCAP (writer, reader, reindex), for the recorder and the CLI.
@@ -12,6 +13,7 @@
 
 pub mod bag;
 pub mod nodes;
+pub mod player;
 pub mod recorder;
 pub mod reward;
 pub mod shared;
