@@ -18,8 +18,9 @@ use serde_json::json;
 /// Writes to --out: results.csv (one row per task), summary.txt (the table and per-axis
 /// summaries) and success.png (four 8x8 heatmaps, one per robot in the order IIWA, Jaco,
 /// Gen3, Panda; within one, row = 2*object + objective/2 and column = 2*obstacle +
-/// objective%2 in the suite's axis orders; white = 0, green = 1; labelled with the robots,
-/// obstacles, objects and the objectives' places in each 2x2 block).
+/// objective%2 in the suite's axis orders; white = 0, green = 1, the rate written in each cell,
+/// grey = not run; labelled with the robots, obstacles, objects and the objectives' places in
+/// each 2x2 block).
 ///
 /// Examples:
 ///   composuite expert --robot IIWA --object box --episodes 3
@@ -162,7 +163,16 @@ pub fn run(args: &ExpertArgs) -> Result<(), String> {
     write_csv(&args.out, &results)?;
     let summary = summary_text(&results, mean_success, args.episodes);
     std::fs::write(args.out.join("summary.txt"), &summary).map_err(|e| e.to_string())?;
-    write_heatmap(&args.out.join("success.png"), &results)?;
+    crate::plots::success_heatmap(
+        &args.out.join("success.png"),
+        "Scripted expert: success rate per task",
+        &|task| {
+            results
+                .iter()
+                .find(|r| r.task == task)
+                .map(TaskResult::success_rate)
+        },
+    )?;
     if args.json {
         let rows: Vec<_> = results
             .iter()
@@ -258,143 +268,4 @@ fn summary_text(results: &[TaskResult], mean_success: f64, episodes: u64) -> Str
         }
     ));
     s
-}
-
-/// Four 8×8 grids side by side, labelled; each cell a square coloured from white (0) to green
-/// (1); grey where a task was not run. Above each grid its robot and the obstacle of each pair
-/// of columns; left of the grids the object of each pair of rows; below, the key to the four
-/// objectives within a 2×2 block (PP push / TC shelf).
-fn write_heatmap(path: &std::path::Path, results: &[TaskResult]) -> Result<(), String> {
-    const CELL: usize = 24;
-    const GAP: usize = 16;
-    /// Left margin for the row labels, top margin for the robot and column labels, bottom
-    /// margin for the key.
-    const LEFT: usize = 64;
-    const TOP: usize = 40;
-    const BOTTOM: usize = 28;
-    let grid = 8 * CELL;
-    let (width, height) = (LEFT + 4 * grid + 4 * GAP, TOP + grid + BOTTOM);
-    let mut pixels = vec![255u8; width * height * 3];
-    let mut put = |x: usize, y: usize, rgb: [u8; 3]| {
-        if x < width && y < height {
-            pixels[(y * width + x) * 3..(y * width + x) * 3 + 3].copy_from_slice(&rgb);
-        }
-    };
-    for task in all_tasks() {
-        let origin_x = LEFT + task.robot.index() * (grid + GAP);
-        let j = task.objective.index();
-        let row = 2 * task.object.index() + j / 2;
-        let col = 2 * task.obstacle.index() + j % 2;
-        let rgb = match results.iter().find(|r| r.task == task) {
-            Some(r) => {
-                let v = r.success_rate();
-                [
-                    (255.0 * (1.0 - v)) as u8,
-                    (255.0 - 100.0 * v) as u8,
-                    (255.0 * (1.0 - v)) as u8,
-                ]
-            }
-            None => [200, 200, 200],
-        };
-        let (x0, y0) = (origin_x + col * CELL, TOP + row * CELL);
-        for y in y0 + 1..y0 + CELL - 1 {
-            for x in x0 + 1..x0 + CELL - 1 {
-                put(x, y, rgb);
-            }
-        }
-    }
-    // Labels: robots and obstacles over the grids, objects to the left, the key below.
-    let robots = ["IIWA", "JACO", "GEN3", "PANDA"];
-    let obstacles = ["NONE", "OWALL", "DOOR", "GWALL"];
-    let objects = ["BOX", "HOLLOW", "PLATE", "DUMBB"];
-    for (r, robot) in robots.iter().enumerate() {
-        let x0 = LEFT + r * (grid + GAP);
-        draw_text(&mut put, robot, x0 + grid / 2 - text_width(robot) / 2, 4);
-        for (o, obstacle) in obstacles.iter().enumerate() {
-            let x = x0 + o * 2 * CELL + CELL - text_width(obstacle) / 2;
-            draw_text(&mut put, obstacle, x, TOP - 14);
-        }
-    }
-    for (o, object) in objects.iter().enumerate() {
-        draw_text(&mut put, object, 4, TOP + o * 2 * CELL + CELL - 5);
-    }
-    draw_text(
-        &mut put,
-        "2X2 BLOCK: PICK_PLACE PUSH / TRASH_CAN SHELF",
-        LEFT,
-        TOP + grid + 10,
-    );
-    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width as u32, height as u32);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(&pixels).map_err(|e| e.to_string())
-}
-
-/// Pixel scale of the 3×5 font.
-const FONT_SCALE: usize = 2;
-
-/// Width (px) of `text` in the 3×5 font (one column of space between letters).
-fn text_width(text: &str) -> usize {
-    text.chars().count() * 4 * FONT_SCALE
-}
-
-/// Draws `text` (upper case, digits, space, `_`, `/`, `:`) in black with its top left at
-/// (`x`, `y`).
-fn draw_text(put: &mut impl FnMut(usize, usize, [u8; 3]), text: &str, x: usize, y: usize) {
-    for (k, c) in text.chars().enumerate() {
-        let rows = glyph(c);
-        for (gy, bits) in rows.iter().enumerate() {
-            for gx in 0..3 {
-                if bits & (0b100 >> gx) != 0 {
-                    for dy in 0..FONT_SCALE {
-                        for dx in 0..FONT_SCALE {
-                            put(
-                                x + (k * 4 + gx) * FONT_SCALE + dx,
-                                y + gy * FONT_SCALE + dy,
-                                [0, 0, 0],
-                            );
-                        }
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// The 3×5 glyph of `c`, one row of three bits (left = 0b100) per line; blank if unknown.
-fn glyph(c: char) -> [u8; 5] {
-    match c {
-        'A' => [0b010, 0b101, 0b111, 0b101, 0b101],
-        'B' => [0b110, 0b101, 0b110, 0b101, 0b110],
-        'C' => [0b011, 0b100, 0b100, 0b100, 0b011],
-        'D' => [0b110, 0b101, 0b101, 0b101, 0b110],
-        'E' => [0b111, 0b100, 0b110, 0b100, 0b111],
-        'F' => [0b111, 0b100, 0b110, 0b100, 0b100],
-        'G' => [0b011, 0b100, 0b101, 0b101, 0b011],
-        'H' => [0b101, 0b101, 0b111, 0b101, 0b101],
-        'I' => [0b111, 0b010, 0b010, 0b010, 0b111],
-        'J' => [0b001, 0b001, 0b001, 0b101, 0b010],
-        'K' => [0b101, 0b101, 0b110, 0b101, 0b101],
-        'L' => [0b100, 0b100, 0b100, 0b100, 0b111],
-        'M' => [0b101, 0b111, 0b111, 0b101, 0b101],
-        'N' => [0b110, 0b101, 0b101, 0b101, 0b101],
-        'O' => [0b010, 0b101, 0b101, 0b101, 0b010],
-        'P' => [0b110, 0b101, 0b110, 0b100, 0b100],
-        'R' => [0b110, 0b101, 0b110, 0b101, 0b101],
-        'S' => [0b011, 0b100, 0b010, 0b001, 0b110],
-        'T' => [0b111, 0b010, 0b010, 0b010, 0b010],
-        'U' => [0b101, 0b101, 0b101, 0b101, 0b111],
-        'V' => [0b101, 0b101, 0b101, 0b101, 0b010],
-        'W' => [0b101, 0b101, 0b111, 0b111, 0b101],
-        'X' => [0b101, 0b101, 0b010, 0b101, 0b101],
-        'Y' => [0b101, 0b101, 0b010, 0b010, 0b010],
-        '2' => [0b110, 0b001, 0b010, 0b100, 0b111],
-        '3' => [0b110, 0b001, 0b010, 0b001, 0b110],
-        '_' => [0, 0, 0, 0, 0b111],
-        '/' => [0b001, 0b001, 0b010, 0b100, 0b100],
-        ':' => [0, 0b010, 0, 0b010, 0],
-        _ => [0; 5],
-    }
 }
