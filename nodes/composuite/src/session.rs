@@ -52,6 +52,10 @@ pub struct SessionArgs {
     /// Print the per-episode table as JSON instead of the summary.
     #[arg(long)]
     json: bool,
+    /// Run without the recorder: no bag, the rest as usual (what recording costs is the
+    /// difference; `scripts/bench-recording` measures it).
+    #[arg(long)]
+    no_record: bool,
 }
 
 /// Run the session.
@@ -85,15 +89,19 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     let bag = out.join("bag");
     let namespace = format!("/session_{}", std::process::id());
     let mut launch = LaunchArgs::one_environment(&args.tasks[0], &namespace, "warn");
-    launch.record = Some(bag.clone());
+    launch.record = (!args.no_record).then(|| bag.clone());
     launch.horizon = args.horizon;
     let total = tasks.len() as u64 * u64::from(args.episodes);
     eprintln!(
-        "composuite session: {} task(s) × {} episode(s), policy {}, recording into {}",
+        "composuite session: {} task(s) × {} episode(s), policy {}, {}",
         tasks.len(),
         args.episodes,
         policy.name(),
-        bag.display()
+        if args.no_record {
+            "not recording".to_string()
+        } else {
+            format!("recording into {}", bag.display())
+        }
     );
     let mut suite = Suite::start(&launch)?;
     let plan = Plan {
@@ -102,7 +110,7 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
         episodes: args.episodes,
         seed: args.seed,
         policy,
-        wait_for_recorder: true,
+        wait_for_recorder: !args.no_record,
     };
     let progress = Progress::new(total);
     let result = drive(&plan, &mut suite, |o| progress.episode(o));
@@ -127,10 +135,14 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
         );
     } else {
         print!("{}", summary(&outcomes));
+        let bag_note = if args.no_record {
+            String::new()
+        } else {
+            format!("bag/ (composuite bag info {}), ", bag.display())
+        };
         println!(
-            "wrote {}: bag/ (composuite bag info {}), episodes.csv, episodes.json, rewards.png, success.png",
+            "wrote {}: {bag_note}episodes.csv, episodes.json, rewards.png, success.png",
             out.display(),
-            bag.display()
         );
     }
     if outcomes.iter().any(|o| !o.identical) {

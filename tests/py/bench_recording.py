@@ -1,0 +1,167 @@
+"""What recording costs: the same lockstep session (`composuite session`, one environment, a
+built-in policy over ROS 2) run without the recorder (`--no-record`) and with it, alternately;
+prints lockstep steps/s of each and the ratio, the bag's bytes per env step, and the recorder's
+CPU and RSS sampled once a second over the recorded runs (RSS after warm-up, at the end, and
+its growth).
+
+Run inside the loopback-only namespace; `scripts/bench-recording` does that and builds the
+release binary first. Figures only — nothing is asserted.
+
+    python tests/py/bench_recording.py --composuite target/release/composuite --steps 20000
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+HORIZON = 500
+PAGE = os.sysconf("SC_PAGE_SIZE")
+TICKS = os.sysconf("SC_CLK_TCK")
+
+
+def recorder_pid(bag: Path) -> int | None:
+    """The recorder node writing `bag` (`composuite node recorder ... -p output:=BAG`)."""
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            argv = (entry / "cmdline").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        text = b" ".join(argv).decode(errors="replace")
+        if " node recorder " in text and f"output:={bag}" in text:
+            return int(entry.name)
+    return None
+
+
+def sample(pid: int) -> tuple[float, int] | None:
+    """(CPU seconds, RSS bytes) of `pid`, or None once it is gone."""
+    try:
+        fields = (Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1]).split()
+        cpu = (int(fields[11]) + int(fields[12])) / TICKS  # utime + stime
+        rss = int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * PAGE
+        return cpu, rss
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+class RecorderWatch(threading.Thread):
+    """Samples the session's recorder once a second until it exits."""
+
+    def __init__(self, session: subprocess.Popen, bag: Path):
+        super().__init__(daemon=True)
+        self.session = session
+        self.bag = bag
+        self.samples: list[tuple[float, float, int]] = []  # (wall, cpu s, rss bytes)
+
+    def run(self) -> None:
+        pid = None
+        while self.session.poll() is None and pid is None:
+            pid = recorder_pid(self.bag)
+            time.sleep(0.05)
+        while pid is not None and self.session.poll() is None:
+            got = sample(pid)
+            if got is None:
+                break
+            self.samples.append((time.monotonic(), *got))
+            time.sleep(1.0)
+
+
+def run_session(composuite: str, task: str, policy: str, episodes: int, record: bool,
+                out: Path) -> dict:
+    args = [composuite, "session", "--tasks", task, "--episodes", str(episodes), "--policy", policy,
+            "--horizon", str(HORIZON), "--seed", "0", "--out", str(out)]
+    if not record:
+        args.append("--no-record")
+    start = time.monotonic()
+    session = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    watch = RecorderWatch(session, out / "bag") if record else None
+    if watch:
+        watch.start()
+    stdout, stderr = session.communicate()
+    wall = time.monotonic() - start
+    if watch:
+        watch.join()
+    if session.returncode != 0:
+        sys.exit(f"session failed ({session.returncode}):\n{stderr[-3000:]}")
+    rates = re.findall(r"([\d.]+) steps/s", stderr)
+    result = {"record": record, "steps_per_s": float(rates[-1]), "wall_s": wall}
+    if record:
+        steps = episodes * HORIZON
+        bag_bytes = sum(f.stat().st_size for f in (out / "bag").iterdir())
+        result["bag_bytes_per_step"] = bag_bytes / steps
+        samples = watch.samples
+        if len(samples) >= 3:
+            warm = samples[max(1, len(samples) // 10)]
+            last = samples[-1]
+            result["recorder_cpu_percent"] = 100 * (last[1] - samples[0][1]) / max(last[0] - samples[0][0], 1e-9)
+            result["recorder_rss_mb_after_warmup"] = warm[2] / 1e6
+            result["recorder_rss_mb_end"] = last[2] / 1e6
+            result["recorder_rss_mb_max"] = max(s[2] for s in samples) / 1e6
+            result["recorder_rss_growth_mb"] = (last[2] - warm[2]) / 1e6
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--composuite", required=True, help="the composuite binary (release build)")
+    parser.add_argument("--steps", type=int, default=20_000, help="env steps per run (multiple of 500)")
+    parser.add_argument("--rounds", type=int, default=2, help="runs of each kind, alternating")
+    parser.add_argument("--task", default="IIWA/box/no_obstacle/pick_place")
+    parser.add_argument("--policy", default="zero", help="expert, random or zero (the cheapest agent)")
+    parser.add_argument("--record-only", action="store_true",
+                        help="only the recorded runs (for the recorder's RSS over a long session)")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    episodes = max(1, args.steps // HORIZON)
+    results = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for round_ in range(args.rounds):
+            for record in (True,) if args.record_only else (False, True):
+                out = Path(tmp) / f"{round_}_{int(record)}"
+                result = run_session(args.composuite, args.task, args.policy, episodes, record, out)
+                results.append(result)
+                print(f"round {round_ + 1}, {'recording' if record else 'not recording'}: "
+                      f"{result['steps_per_s']:.0f} steps/s", file=sys.stderr, flush=True)
+                # Bags are large: keep only the figures.
+                subprocess.run(["rm", "-rf", str(out)], check=False)
+    recorded = [r for r in results if r["record"]]
+    with_bag = statistics.median(r["steps_per_s"] for r in recorded)
+    plain = statistics.median([r["steps_per_s"] for r in results if not r["record"]] or [float("nan")])
+    summary = {
+        "task": args.task, "policy": args.policy, "steps_per_run": episodes * HORIZON, "rounds": args.rounds,
+        "steps_per_s_without_recording": plain, "steps_per_s_recording": with_bag,
+        "recording_cost_percent": 100 * (1 - with_bag / plain),
+        "bag_bytes_per_step": statistics.median(r["bag_bytes_per_step"] for r in recorded),
+    }
+    last = recorded[-1]
+    for key in ("recorder_cpu_percent", "recorder_rss_mb_after_warmup", "recorder_rss_mb_end",
+                "recorder_rss_mb_max", "recorder_rss_growth_mb"):
+        if key in last:
+            summary[key] = last[key]
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return
+    print(f"{args.task}, policy {args.policy}, {episodes * HORIZON} steps per run, median of {args.rounds}:")
+    print(f"  lockstep steps/s without recording {plain:.0f}, recording {with_bag:.0f} "
+          f"(recording costs {summary['recording_cost_percent']:.1f} %)")
+    print(f"  bag: {summary['bag_bytes_per_step']:.0f} bytes per env step (zstd-compressed MCAP)")
+    if "recorder_cpu_percent" in summary:
+        print(f"  recorder (last run): CPU {summary['recorder_cpu_percent']:.0f} % of a core, RSS "
+              f"{summary['recorder_rss_mb_after_warmup']:.1f} MB after warm-up, "
+              f"{summary['recorder_rss_mb_end']:.1f} MB at the end (max {summary['recorder_rss_mb_max']:.1f}, "
+              f"growth {summary['recorder_rss_growth_mb']:+.2f} MB)")
+
+
+if __name__ == "__main__":
+    main()
