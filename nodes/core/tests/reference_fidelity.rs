@@ -78,9 +78,9 @@ fn staged_rewards_equal_the_references_on_its_own_states() {
 fn replayed_reference_episodes_stay_within_the_documented_bounds() {
     // (step, joints mean |Δ| rad, grip site m, object m), each for the worst single episode.
     const BOUNDS: [(usize, f64, f64, f64); 3] = [
-        (10, 0.010, 0.012, 0.001),
-        (30, 0.010, 0.012, 0.001),
-        (100, 0.010, 0.012, 0.001),
+        (10, 0.006, 0.0075, 0.001),
+        (30, 0.006, 0.0075, 0.001),
+        (100, 0.006, 0.0075, 0.001),
     ];
     const REWARD_BOUND: f64 = 0.005;
     let mut report = Vec::new();

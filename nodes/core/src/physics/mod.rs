@@ -4,11 +4,13 @@
 //! coordinate) arms, force-based joint motors, stiff contacts, one solver iteration with eight
 //! inner PGS iterations, coupled fingers.
 
+mod arm_dynamics;
 mod params;
 mod robot_model;
 mod tags;
 mod world;
 
+pub use arm_dynamics::{ArmDynamics, ArmState, arm_dynamics};
 pub use params::{ArmGains, GripperParams, PhysicsParams};
 pub use robot_model::{
     BodyModel, CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, JointModel,

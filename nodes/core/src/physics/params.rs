@@ -49,6 +49,9 @@ pub struct ArmGains {
     pub armature: [f64; 7],
     /// Viscous joint damping (N·m·s/rad), as the reference compiles it.
     pub damping: [f64; 7],
+    /// Dry joint friction (N·m): the most torque friction can oppose motion with, MuJoCo's
+    /// `frictionloss` as the reference compiles it (the same on every joint of an arm).
+    pub frictionloss: f64,
 }
 
 impl ArmGains {
@@ -60,11 +63,20 @@ impl ArmGains {
             Robot::Iiwa => [0.1; 7],
             Robot::Jaco | Robot::Gen3 | Robot::Panda => [0.1, 0.1, 0.1, 0.1, 0.1, 0.01, 0.01],
         };
+        // Reference frictionloss (docs/reference-facts.md §4.1): robosuite's default 0.1, except
+        // the Jaco's own 0.01.
+        let frictionloss = match robot {
+            Robot::Jaco => 0.01,
+            Robot::Iiwa | Robot::Gen3 | Robot::Panda => 0.1,
+        };
         ArmGains {
             kp: [4000.0, 4000.0, 3000.0, 3000.0, 1500.0, 1000.0, 1000.0],
-            kd: [400.0, 400.0, 300.0, 300.0, 120.0, 80.0, 80.0],
+            // Joint 1 carries the largest armature (5 kg·m²) and turns the whole arm: with 400
+            // the Gen3's torque-limited joint 1 overshot a 0.3 rad step by 10.9 %.
+            kd: [550.0, 400.0, 300.0, 300.0, 120.0, 80.0, 80.0],
             armature: [5.0, 2.5, 5.0 / 3.0, 1.25, 1.0, 5.0 / 6.0, 5.0 / 7.0],
             damping,
+            frictionloss,
         }
     }
 }

@@ -4,6 +4,7 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::prelude::*;
 
+use super::arm_dynamics::{ArmDynamics, ArmState, arm_dynamics};
 use super::params::{ArmGains, GripperParams, PhysicsParams};
 use super::robot_model::{
     CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, RobotModel, Shape,
@@ -55,14 +56,17 @@ pub enum ServoMode {
     /// limit: how a real arm's driver tracks absolute position commands.
     #[default]
     Stiff,
-    /// The reference benchmark's joint controller (docs/reference-facts.md §4.2): a PD with kp 50
-    /// and damping ratio 1 scaled by each joint's inertia (the diagonal of the joint-space mass
-    /// matrix, armature included), so agents trained on the reference see the same soft,
+    /// The reference benchmark's joint controller (docs/reference-facts.md §4.2), every physics
+    /// step: torques
+    /// τ = M(q)·(kp·e − kd·q̇) + bias with kp 50, kd 2√50 (critical damping), the full joint-space
+    /// mass matrix M (armature included) and the gravity, Coriolis and centrifugal torques
+    /// (`arm_dynamics`), clipped to the effort limits — so each joint settles like an ideal
+    /// critically damped spring, and agents trained on the reference see the same soft,
     /// slow-settling response. No set-point rate limit (the reference has none).
     Reference,
 }
 
-/// The reference's joint-controller stiffness (1/s²) and damping (1/s): kp 50, ζ = 1.
+/// The reference's joint-controller stiffness (1/s²); its damping is 2√kp (ζ = 1).
 const REFERENCE_KP: f64 = 50.0;
 
 /// Finger/object contacts at one instant.
@@ -136,9 +140,6 @@ pub struct SimWorld {
     gripper_c: f64,
     /// How the arm servos behave.
     servo_mode: ServoMode,
-    /// The reference controller's gains for this control step (they follow the joint inertias,
-    /// which change slowly; recomputed once per control step).
-    reference_gains: ([f64; ARM_DOF], [f64; ARM_DOF]),
     /// The object body, if one was added.
     pub object: Option<RigidBodyHandle>,
     /// Physics steps taken.
@@ -268,7 +269,6 @@ impl SimWorld {
             gripper_command: GripperCommand::Reference { action: 0.0 },
             gripper_c: 0.0,
             servo_mode: ServoMode::Stiff,
-            reference_gains: ([0.0; ARM_DOF], [0.0; ARM_DOF]),
             object: None,
             steps: 0,
         };
@@ -278,19 +278,35 @@ impl SimWorld {
     }
 
     fn configure_joints(&mut self) {
+        let link_ids = self.arm.link_ids.clone();
         let (mb, _) = self
             .physics
             .multibody_joints
             .get_mut(self.arm.joints[0])
             .expect("arm multibody");
+        // Settle the multibody's degrees of freedom first: until its fixed root is noticed, the
+        // root counts 6 free DoFs that are dropped later, and per-DoF values written before
+        // would shift onto the wrong joints.
+        mb.forward_kinematics(&self.physics.bodies, false);
         mb.set_self_contacts_enabled(false);
-        for (dof, joint) in self.model.joints.iter().enumerate().take(ARM_DOF) {
-            mb.armature_mut()[dof] = self.gains.armature[dof] as Real;
-            mb.damping_mut()[dof] = self.gains.damping[dof] as Real;
-            let _ = joint;
-        }
-        for dof in ARM_DOF..self.model.joints.len() {
-            mb.damping_mut()[dof] = 0.0;
+        for (j, &link) in link_ids.iter().enumerate() {
+            let dof = mb.link(link).expect("link").assembly_id();
+            let arm_joint = j < ARM_DOF;
+            mb.armature_mut()[dof] = if arm_joint {
+                self.gains.armature[j]
+            } else {
+                0.0
+            } as Real;
+            mb.damping_mut()[dof] = if arm_joint {
+                self.gains.damping[j]
+            } else {
+                0.0
+            } as Real;
+            mb.frictions_mut()[dof] = if arm_joint {
+                self.gains.frictionloss
+            } else {
+                0.0
+            } as Real;
         }
         // The fingers move as one: q_right = −q_left (a mimic joint).
         let left = self.link_id(ARM_DOF);
@@ -408,18 +424,7 @@ impl SimWorld {
 
     /// Switch the arm servos' behaviour.
     pub fn set_servo_mode(&mut self, mode: ServoMode) {
-        if mode != self.servo_mode {
-            self.servo_mode = mode;
-            self.update_reference_gains();
-        }
-    }
-
-    fn update_reference_gains(&mut self) {
-        if self.servo_mode == ServoMode::Reference {
-            let m = self.joint_inertias();
-            let kd = 2.0 * REFERENCE_KP.sqrt();
-            self.reference_gains = (m.map(|m| REFERENCE_KP * m), m.map(|m| kd * m));
-        }
+        self.servo_mode = mode;
     }
 
     /// The current servo behaviour.
@@ -482,12 +487,18 @@ impl SimWorld {
     }
 
     fn update_servos(&mut self) {
-        let tau_g = self.gravity_torques();
         let gripper_targets = self.finger_targets();
-        let (kp, kd): ([f64; ARM_DOF], [f64; ARM_DOF]) = match self.servo_mode {
-            ServoMode::Stiff => (self.gains.kp, self.gains.kd),
-            ServoMode::Reference => self.reference_gains,
+        // The reference controller drives the joints with torques; the stiff servos with
+        // rapier's joint motors (implicit springs), gravity fed forward through their set points.
+        let reference_torques = match self.servo_mode {
+            ServoMode::Reference => Some(self.reference_torques()),
+            ServoMode::Stiff => None,
         };
+        let tau_g = match self.servo_mode {
+            ServoMode::Stiff => self.gravity_torques(),
+            ServoMode::Reference => [0.0; ARM_DOF],
+        };
+        let (kp, kd) = (self.gains.kp, self.gains.kd);
         let gripper = &self.gripper;
         let link_ids = &self.arm.link_ids;
         let (mb, _) = self
@@ -498,24 +509,26 @@ impl SimWorld {
         let dt = self.params.dt;
         for j in 0..ARM_DOF {
             let joint = &self.model.joints[j];
-            let max_step = match self.servo_mode {
-                ServoMode::Stiff => joint.velocity * dt,
-                ServoMode::Reference => f64::INFINITY,
-            };
+            let data = &mut mb.link_mut(link_ids[j]).expect("link").joint.data;
+            if reference_torques.is_some() {
+                self.setpoints[j] = self.arm_targets[j];
+                data.set_motor_position(JointAxis::AngX, 0.0, 0.0, 0.0);
+                data.set_motor_max_force(JointAxis::AngX, 0.0);
+                continue;
+            }
+            let max_step = joint.velocity * dt;
             let step = (self.arm_targets[j] - self.setpoints[j]).clamp(-max_step, max_step);
             self.setpoints[j] += step;
             // Feed-forward gravity compensation through the servo's set point: at q = set point
             // the spring pushes exactly −τ_g.
             let target = self.setpoints[j] - tau_g[j] / kp[j];
-            let data = &mut mb.link_mut(link_ids[j]).expect("link").joint.data;
             data.set_motor_position(
                 JointAxis::AngX,
                 target as Real,
                 kp[j] as Real,
                 kd[j] as Real,
             );
-            let effort = joint.effort;
-            data.set_motor_max_force(JointAxis::AngX, effort as Real);
+            data.set_motor_max_force(JointAxis::AngX, joint.effort as Real);
         }
         let (targets, max_force) = gripper_targets;
         for (i, target) in targets.iter().enumerate() {
@@ -527,6 +540,60 @@ impl SimWorld {
                 gripper.kd as Real,
             );
             data.set_motor_max_force(JointAxis::LinX, max_force as Real);
+        }
+        self.apply_joint_torques(&reference_torques.unwrap_or([0.0; ARM_DOF]));
+    }
+
+    /// The arm's mass matrix and bias torques now.
+    pub fn dynamics(&self) -> ArmDynamics {
+        let body_poses: Vec<Isometry3<f64>> = self
+            .arm
+            .bodies
+            .iter()
+            .map(|&h| from_pose(self.physics.bodies[h].position()))
+            .collect();
+        arm_dynamics(&ArmState {
+            model: self.model,
+            body_poses: &body_poses,
+            downstream: &self.arm.downstream,
+            armature: &self.gains.armature,
+            velocities: &self.arm_velocities(),
+            gravity: self.params.gravity,
+        })
+    }
+
+    /// The reference controller's joint torques for the current state and targets (N·m):
+    /// M(q)·(kp·e − kd·q̇) + bias, clipped to the effort limits as robosuite clips them.
+    fn reference_torques(&self) -> [f64; ARM_DOF] {
+        let dynamics = self.dynamics();
+        let (q, qd) = (self.arm_positions(), self.arm_velocities());
+        let kd = 2.0 * REFERENCE_KP.sqrt();
+        let acceleration = nalgebra::SVector::<f64, ARM_DOF>::from_fn(|j, _| {
+            REFERENCE_KP * (self.arm_targets[j] - q[j]) - kd * qd[j]
+        });
+        let tau = dynamics.mass_matrix * acceleration;
+        std::array::from_fn(|j| {
+            let effort = self.model.joints[j].effort;
+            (tau[j] + dynamics.bias[j]).clamp(-effort, effort)
+        })
+    }
+
+    /// Exert `tau` (N·m) at each arm joint: on its child body about the axis, and the reaction
+    /// on its parent. Replaces what was exerted the step before.
+    fn apply_joint_torques(&mut self, tau: &[f64; ARM_DOF]) {
+        for &h in &self.arm.bodies {
+            self.physics.bodies[h].reset_torques(false);
+        }
+        for (j, &t) in tau.iter().enumerate() {
+            if t == 0.0 {
+                continue;
+            }
+            let joint = &self.model.joints[j];
+            let child = self.arm.bodies[joint.child];
+            let axis = from_pose(self.physics.bodies[child].position()).rotation * joint.axis;
+            let torque = to_vec(&(axis * t));
+            self.physics.bodies[child].add_torque(torque, true);
+            self.physics.bodies[self.arm.bodies[joint.parent]].add_torque(-torque, true);
         }
     }
 
@@ -576,7 +643,6 @@ impl SimWorld {
 
     /// One control period (`substeps` physics steps).
     pub fn step_control(&mut self) {
-        self.update_reference_gains();
         for _ in 0..self.params.substeps {
             self.step();
         }
@@ -717,7 +783,6 @@ impl SimWorld {
             gripper_command: self.gripper_command,
             gripper_c: self.gripper_c,
             servo_mode: self.servo_mode,
-            reference_gains: self.reference_gains,
             object: self.object,
             steps: 0,
         }

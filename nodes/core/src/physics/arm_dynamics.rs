@@ -1,0 +1,147 @@
+//! The arm's joint-space dynamics at one instant: the mass matrix M(q) (armature included) and
+//! the bias torques (gravity, Coriolis and centrifugal: what the joints must exert for zero
+//! joint acceleration). The reference's joint controller needs both, every physics step:
+//! τ = M(q)·(kp·e − kd·q̇) + bias (MuJoCo's `qfrc_bias`).
+//!
+//! Computed from the model's bodies at their current world poses, by composite bodies: each arm
+//! joint moves the bodies downstream of it. The fingers count as rigid parts of the hand (their
+//! own slide velocities are left out of the bias: grams moving millimetres).
+
+use nalgebra::{Isometry3, Matrix3, SMatrix, Vector3};
+
+use super::robot_model::RobotModel;
+use super::world::ARM_DOF;
+
+/// M(q) and the bias torques of the 7 arm joints.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmDynamics {
+    /// Joint-space inertia (kg·m²), symmetric, armature on the diagonal.
+    pub mass_matrix: SMatrix<f64, ARM_DOF, ARM_DOF>,
+    /// Torques (N·m) that hold every joint at zero acceleration against gravity and the
+    /// velocity-product forces.
+    pub bias: [f64; ARM_DOF],
+}
+
+/// What [`arm_dynamics`] reads of the arm.
+pub struct ArmState<'a> {
+    /// The arm's bodies and joints.
+    pub model: &'a RobotModel,
+    /// Each model body's world pose (body frame; the joint frames are the child bodies').
+    pub body_poses: &'a [Isometry3<f64>],
+    /// For each arm joint, the bodies it moves.
+    pub downstream: &'a [Vec<usize>],
+    /// Rotor inertia per joint (kg·m²).
+    pub armature: &'a [f64; ARM_DOF],
+    /// Joint velocities (rad/s).
+    pub velocities: &'a [f64; ARM_DOF],
+    /// Gravitational acceleration (m/s², along −z).
+    pub gravity: f64,
+}
+
+/// A joint's frame in the world: where its axis passes and which way it points.
+struct JointFrame {
+    anchor: Vector3<f64>,
+    axis: Vector3<f64>,
+}
+
+/// A body's mass properties in the world frame.
+struct WorldBody {
+    mass: f64,
+    com: Vector3<f64>,
+    inertia: Matrix3<f64>,
+    /// The outermost arm joint that moves it (the link it rides on).
+    link: usize,
+}
+
+/// M(q) and the bias torques of the arm in `arm`'s state.
+pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
+    let model = arm.model;
+    debug_assert!(
+        (1..ARM_DOF).all(|j| model.joints[j].parent == model.joints[j - 1].child),
+        "the arm joints form a chain"
+    );
+    let joints: Vec<JointFrame> = (0..ARM_DOF)
+        .map(|j| {
+            let frame = arm.body_poses[model.joints[j].child];
+            JointFrame {
+                anchor: frame.translation.vector,
+                axis: frame.rotation * model.joints[j].axis,
+            }
+        })
+        .collect();
+    let bodies: Vec<Option<WorldBody>> = (0..model.bodies.len())
+        .map(|b| {
+            let link = (0..ARM_DOF)
+                .rev()
+                .find(|&j| arm.downstream[j].contains(&b))?;
+            let body = &model.bodies[b];
+            let pose = arm.body_poses[b];
+            let r = pose.rotation.to_rotation_matrix();
+            Some(WorldBody {
+                mass: body.mass,
+                com: (pose * nalgebra::Point3::from(body.com)).coords,
+                inertia: r.matrix() * body.inertia * r.matrix().transpose(),
+                link,
+            })
+        })
+        .collect();
+
+    // M: for i ≤ j, the bodies both joints move are those downstream of j.
+    let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
+    for j in 0..ARM_DOF {
+        for i in 0..=j {
+            let (a_i, a_j) = (&joints[i], &joints[j]);
+            let mut m = 0.0;
+            for body in arm.downstream[j].iter().filter_map(|&b| bodies[b].as_ref()) {
+                let v_i = a_i.axis.cross(&(body.com - a_i.anchor));
+                let v_j = a_j.axis.cross(&(body.com - a_j.anchor));
+                m += body.mass * v_i.dot(&v_j) + a_i.axis.dot(&(body.inertia * a_j.axis));
+            }
+            mass_matrix[(i, j)] = m;
+            mass_matrix[(j, i)] = m;
+        }
+        mass_matrix[(j, j)] += arm.armature[j];
+    }
+
+    // Bias: each link's motion with every joint acceleration zero (outward), then the wrench
+    // each body needs for it (and against gravity), summed about each joint (inward).
+    let mut omega = [Vector3::<f64>::zeros(); ARM_DOF];
+    let mut alpha = [Vector3::<f64>::zeros(); ARM_DOF];
+    let mut anchor_acc = [Vector3::<f64>::zeros(); ARM_DOF];
+    for j in 0..ARM_DOF {
+        let spin = joints[j].axis * arm.velocities[j];
+        if j == 0 {
+            omega[0] = spin;
+            continue;
+        }
+        let (w, a, acc) = (omega[j - 1], alpha[j - 1], anchor_acc[j - 1]);
+        let d = joints[j].anchor - joints[j - 1].anchor;
+        omega[j] = w + spin;
+        alpha[j] = a + w.cross(&spin);
+        anchor_acc[j] = acc + a.cross(&d) + w.cross(&w.cross(&d));
+    }
+    let g = Vector3::new(0.0, 0.0, -arm.gravity);
+    let wrenches: Vec<Option<(Vector3<f64>, Vector3<f64>)>> = bodies
+        .iter()
+        .map(|body| {
+            let body = body.as_ref()?;
+            let (w, a) = (omega[body.link], alpha[body.link]);
+            let r = body.com - joints[body.link].anchor;
+            let com_acc = anchor_acc[body.link] + a.cross(&r) + w.cross(&w.cross(&r));
+            let force = body.mass * (com_acc - g);
+            let moment = body.inertia * a + w.cross(&(body.inertia * w));
+            Some((force, moment))
+        })
+        .collect();
+    let bias = std::array::from_fn(|j| {
+        let joint = &joints[j];
+        let mut torque = Vector3::zeros();
+        for &b in &arm.downstream[j] {
+            if let (Some(body), Some((force, moment))) = (&bodies[b], &wrenches[b]) {
+                torque += moment + (body.com - joint.anchor).cross(force);
+            }
+        }
+        joint.axis.dot(&torque)
+    });
+    ArmDynamics { mass_matrix, bias }
+}
