@@ -28,6 +28,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Header
 
 ARM_JOINTS = 7
 
@@ -101,6 +102,7 @@ class LockstepEnv:
                 for key in [k for k in store if k[0] != reply.episode]:
                     del store[key]
             key = (reply.episode, 0)
+            self.answered = reply.observation.header.stamp  # what the first command answers
             if self._spin_for(lambda: (bool(self.joint_names) and key in self.observations
                                        and key in self.rewards and key in self.statuses), 1.0):
                 return reply.observation
@@ -109,11 +111,15 @@ class LockstepEnv:
 
     def step(self, targets: list[float]):
         key = (self.episode, self.step_count + 1)
-        self.command.publish(JointState(name=self.joint_names, position=[float(t) for t in targets]))
+        # Stamped with the observation it answers: the sim drops a command meant for an earlier
+        # episode (say, sent by an agent that died while another reset).
+        self.command.publish(JointState(header=Header(stamp=self.answered), name=self.joint_names,
+                                        position=[float(t) for t in targets]))
         self._spin_until(lambda: key in self.observations and key in self.rewards and key in self.statuses,
                          f"observation/reward/episode for step {key[1]}")
         self.step_count += 1
         observation, reward, status = self.observations[key], self.rewards[key], self.statuses[key]
+        self.answered = observation.header.stamp
         info = {"success": reward.success, "stages": dict(zip(reward.stage_names, reward.stage_values)),
                 "reason": status.reason_text}
         return observation, reward.total, status.terminated, status.truncated, info

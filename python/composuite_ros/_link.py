@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import rclpy
+from builtin_interfaces.msg import Time
 from composuite_msgs.msg import EpisodeStatus, Observation, StagedReward
 from composuite_msgs.srv import Reset, SampleTasks, SetTask
 from rclpy.context import Context
@@ -31,7 +32,7 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray, String
+from std_msgs.msg import Float64MultiArray, Header, String
 
 from ._cdr import FieldReader
 from .errors import StepLostError, SuiteNotRunningError
@@ -184,6 +185,9 @@ class Channel:
         self.sample_tasks_client = node.create_client(SampleTasks, f"{prefix}/sample_tasks")
         self.episode = 0
         self.step_count = 0
+        # The stamp (sim time, ns) of the latest observation taken: joint commands carry it, so
+        # the sim drops one that arrives after another episode began.
+        self.answered_ns = 0
 
     # ---- incoming ---------------------------------------------------------------------------
 
@@ -306,6 +310,8 @@ class Channel:
         if not reply.success:
             raise RuntimeError(f"reset refused in {self.namespace}: {reply.message}")
         self.episode, self.step_count = reply.episode, 0
+        stamp = reply.observation.header.stamp
+        self.answered_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
         # Drop what belongs to earlier episodes; keep what of this one may have come first.
         for store in (self.observations, self.rewards, self.statuses):
             for key in [k for k in store if k[0] != reply.episode]:
@@ -329,7 +335,9 @@ class Channel:
         self.reference_action.publish(Float64MultiArray(data=[float(a) for a in action]))
 
     def send_joint_targets(self, names: list[str], positions) -> None:
-        self.joint_command.publish(JointState(name=names, position=[float(p) for p in positions]))
+        stamp = Time(sec=self.answered_ns // 1_000_000_000, nanosec=self.answered_ns % 1_000_000_000)
+        self.joint_command.publish(JointState(header=Header(stamp=stamp), name=names,
+                                              position=[float(p) for p in positions]))
 
     def next_key(self) -> tuple[int, int]:
         return (self.episode, self.step_count + 1)
@@ -341,7 +349,9 @@ class Channel:
     def take_step(self) -> StepMessages:
         key = self.next_key()
         self.step_count += 1
-        return StepMessages(self.observations.pop(key), self.rewards.pop(key), self.statuses.pop(key))
+        messages = StepMessages(self.observations.pop(key), self.rewards.pop(key), self.statuses.pop(key))
+        self.answered_ns = messages.observation.stamp_ns
+        return messages
 
     def step_lost_error(self) -> StepLostError:
         key = self.next_key()

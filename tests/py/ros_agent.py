@@ -739,11 +739,18 @@ def _stamp_ns(stamp) -> int:
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
+def stamped(ns: int) -> dict:
+    """A std_msgs/Header (as a dict) stamped `ns` of sim time: what a lockstep command carries
+    (the stamp of the observation it answers)."""
+    return {"stamp": {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}}
+
+
 class LockstepClient:
     """The agent's side of the lockstep protocol on one Agent: `reset(seed)` through the service,
-    then each `step(targets)` publishes joint_command and waits for that step's observation and
-    reward. Steps are matched on (episode, step) and on a stamp later than the reset's, since a
-    restarted task manager counts episodes from 1 again and a stamp never repeats.
+    then each `step(targets)` publishes joint_command (stamped with the observation it answers)
+    and waits for that step's observation and reward. Steps are matched on (episode, step) and
+    on a stamp later than the reset's, since a restarted task manager counts episodes from 1
+    again and a stamp never repeats.
 
         client = LockstepClient(agent)
         client.reset(seed=3)
@@ -774,6 +781,7 @@ class LockstepClient:
         """Take `reply` (a successful reset) and its episode's first joint_states as the start."""
         self.episode, self.step_count = reply.episode, 0
         self.since = _stamp_ns(reply.observation.header.stamp)
+        self.answered = self.since  # the stamp the next command carries
         self.names = list(first.name[:self.ARM_JOINTS])
         self.home = list(first.position[:self.ARM_JOINTS])
 
@@ -788,10 +796,12 @@ class LockstepClient:
 
     def step(self, targets: list[float], timeout: float = 5.0, reward: bool = True) -> Any:
         """One lockstep step to `targets` (absolute arm joint positions); its observation."""
-        self.command.publish(name=self.names, position=[float(t) for t in targets])
+        self.command.publish(name=self.names, position=[float(t) for t in targets],
+                             header=stamped(self.answered))
         self.step_count += 1
         want = self.this_episode(self.step_count)
         observation = self.observations.wait_for(want, timeout=timeout)
+        self.answered = _stamp_ns(observation.header.stamp)
         if reward:
             self.rewards.wait_for(want, timeout=timeout)
         return observation

@@ -202,14 +202,32 @@ def test_an_agent_killed_mid_episode_leaves_the_suite_serving_the_next(launched,
     finally:
         if first_agent.poll() is None:
             first_agent.kill()
-    # The killed agent's last command may still be on its way to the sim; a reset sent at once can
-    # overtake it (the sim serves scene before joint_command), and the old command then steps the
-    # new episode (seen once in CI under load). Known race, see the issue notes; the next agent
-    # here starts a moment later, as a real one would.
-    time.sleep(1.0)
+    # The killed agent's last command may still be on its way to the sim, and a reset sent at once
+    # can overtake it (the sim serves scene before joint_command). Its stamp (the observation it
+    # answered) is older than the new episode, so the sim drops it instead of stepping the new
+    # episode with it: the next agent resets at once.
     stepper.reset(seed=8)
     for _ in range(30):
         stepper.random_step()
     stepper.assert_like_the_reference()
     assert launched.process.poll() is None
     assert "exited on its own" not in launched.text()
+
+
+def test_a_command_stamped_before_the_episode_began_does_not_step_it(launched, stepper):
+    """A joint_command answering an earlier episode's observation (in flight from an agent that
+    died while another reset) is dropped with a log line; one answering this episode's steps it."""
+    from ros_agent import stamped
+
+    stepper.reset(seed=3)
+    old = stepper.since  # this episode's step-0 stamp
+    stepper.random_step()
+    stepper.reset(seed=4)
+    assert stepper.since > old
+    stepper.command.publish(name=stepper.names, position=stepper.home, header=stamped(old))
+    launched.wait_for_log("joint_command dropped")
+    with pytest.raises(TimeoutError):
+        stepper.observations.wait_for(stepper.this_episode(1), timeout=1.0)
+    for _ in range(5):
+        stepper.random_step()  # stamped with this episode's observations: each steps it
+    stepper.assert_like_the_reference()

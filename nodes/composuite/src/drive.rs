@@ -15,6 +15,7 @@ use composuite_core::physics::{ARM_DOF, FINGER_JOINTS, finger_for_gap, pad_gap, 
 use composuite_msgs::msg;
 use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::srv;
+use composuite_msgs::std_msgs::msg::Header;
 use composuite_ros::shared::node::{NodeSpec, RosNode, Startup};
 use composuite_ros::shared::{convert, names, qos};
 use futures::{FutureExt, StreamExt};
@@ -237,6 +238,9 @@ pub fn drive(
                     rewards: Vec::new(),
                 };
                 let mut policy = Policy::new(plan.policy, task, seed, &twin);
+                // Each command carries the stamp of the observation it answers: the sim drops
+                // one meant for an earlier episode.
+                let mut answered = reply.observation.header.stamp.clone();
                 let started = Instant::now();
                 loop {
                     let (joints, finger) = policy.act(&twin)?;
@@ -250,6 +254,10 @@ pub fn drive(
                     }
                     command
                         .publish(JointState {
+                            header: Header {
+                                stamp: answered.clone(),
+                                frame_id: String::new(),
+                            },
                             name: names,
                             position: positions,
                             ..Default::default()
@@ -271,6 +279,7 @@ pub fn drive(
                         ));
                     }
                     let (o, r, s) = seen.take(key);
+                    answered = o.header.stamp.clone();
                     outcome.identical &= bits(&o.flat) == bits(&step.observation.flat())
                         && r.total.to_bits() == step.reward.to_bits();
                     outcome.episode_return += r.total;

@@ -3,7 +3,8 @@
 
 /// Arm and finger joint states (sensor_msgs/JointState), sim → agents.
 pub const JOINT_STATES: &str = "joint_states";
-/// Absolute joint position targets by name (sensor_msgs/JointState), agents → sim.
+/// Absolute joint position targets by name (sensor_msgs/JointState), agents → sim; stamped with
+/// the observation it answers (a command stamped before the episode began is dropped).
 pub const JOINT_COMMAND: &str = "joint_command";
 /// The reference benchmark's 8 action values in [−1, 1] (std_msgs/Float64MultiArray): joint
 /// deltas of 0.05 rad per unit from the measured positions, then the gripper's sign; agents → sim.

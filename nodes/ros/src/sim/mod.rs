@@ -184,6 +184,9 @@ struct Running {
     over_reported: bool,
     /// Whether this episode's object markers went out yet (the first clears the old ones).
     object_drawn: bool,
+    /// The sim time of the episode's step 0 (ns): a `joint_command` stamped earlier was meant
+    /// for an earlier episode.
+    started_ns: u64,
 }
 
 impl Running {
@@ -621,6 +624,7 @@ impl Sim {
             clamp_reported: BTreeSet::new(),
             over_reported: false,
             object_drawn: false,
+            started_ns: 0,
         });
         if robot_changed {
             let _ = self.pubs.robot_description.publish(StringMsg {
@@ -649,6 +653,9 @@ impl Sim {
             scene.episode, scene.seed
         ));
         self.advance_clock();
+        if let Some(run) = &mut self.run {
+            run.started_ns = self.sim_time_ns;
+        }
         if robot_changed {
             // The arena is the task's (the goal marker's place too): drawn again when it changes.
             let stamp = convert::time_from_nanos(self.sim_time_ns);
@@ -706,6 +713,18 @@ impl Sim {
         let Some(run) = self.episode_for("joint_command", log) else {
             return;
         };
+        // Agents stamp a command with the observation it answers (0 = unstamped, taken). One
+        // stamped before this episode began was sent for an earlier one — e.g. by an agent that
+        // died with it in flight while another reset — and must not step this one.
+        let stamp = convert::nanos_of(&command.header.stamp);
+        if stamp != 0 && stamp < run.started_ns {
+            log.warn(format!(
+                "joint_command dropped: stamped {}, before this episode began at {} \
+                 (sim time, ns): it answers an earlier episode's observation",
+                stamp, run.started_ns
+            ));
+            return;
+        }
         let state = read_env(&run.env, time_ns);
         let model = run.model();
         let (arm, finger_gap) = match convert::arm_command(model, command) {
