@@ -268,7 +268,14 @@ def test_the_object_marker_follows_the_recorded_object(recorded):
     scenes = topics["scene"]
     by_stamp = {ns_of(m.markers[-1].header.stamp): m for m in topics["object_markers"]}
     worlds = topics["world_state"]
-    assert len(by_stamp) == len(topics["object_markers"]) == len(worlds)
+    assert len(by_stamp) == len(topics["object_markers"]), "one object_markers message per stamp"
+    # Every recorded world state has its object markers. The launch's own first episode (before
+    # the session's first reset) is published while the recorder's readers are still matching,
+    # so its step-0 state may be in the bag on one of the two topics only.
+    first_world = min(ns_of(w.header.stamp) for w in worlds)
+    unmatched = set(by_stamp) - {ns_of(w.header.stamp) for w in worlds}
+    assert all(stamp < first_world for stamp in unmatched), sorted(unmatched)
+    assert len(worlds) >= len(by_stamp) - 1
     for world in worlds:
         stamp = ns_of(world.header.stamp)
         markers = by_stamp[stamp].markers

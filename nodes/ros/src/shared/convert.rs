@@ -373,15 +373,19 @@ pub fn snapshot(w: &msg::WorldState) -> composuite_core::reward::WorldSnapshot {
     }
 }
 
-/// A `tf` transform of `child` in the world frame.
-pub fn world_transform(
+/// A `tf` transform of `child` in `parent`'s frame at `stamp`, from `child`'s pose there.
+pub fn transform_in(
+    parent: &str,
     child: &str,
     p: &Pose,
     stamp: Time,
 ) -> composuite_msgs::geometry_msgs::msg::TransformStamped {
     use composuite_msgs::geometry_msgs::msg::{Transform, TransformStamped};
     TransformStamped {
-        header: header(stamp),
+        header: Header {
+            stamp,
+            frame_id: parent.into(),
+        },
         child_frame_id: child.into(),
         transform: Transform {
             translation: Vector3 {
@@ -392,6 +396,15 @@ pub fn world_transform(
             rotation: p.orientation.clone(),
         },
     }
+}
+
+/// A `tf` transform of `child` in the world frame.
+pub fn world_transform(
+    child: &str,
+    p: &Pose,
+    stamp: Time,
+) -> composuite_msgs::geometry_msgs::msg::TransformStamped {
+    transform_in(WORLD_FRAME, child, p, stamp)
 }
 
 /// The task a `TaskSpec` message names (by its wire names; any spelling is accepted).

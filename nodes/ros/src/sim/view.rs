@@ -11,7 +11,7 @@ use composuite_core::arena::{Placed, object_parts};
 use composuite_core::axes::Object;
 use composuite_core::physics::SimWorld;
 use composuite_msgs::builtin_interfaces::msg::Time;
-use composuite_msgs::geometry_msgs::msg::{Transform, TransformStamped, Vector3};
+use composuite_msgs::geometry_msgs::msg::{TransformStamped, Vector3};
 use composuite_msgs::msg;
 use composuite_msgs::std_msgs::msg::{ColorRGBA, Header};
 use composuite_msgs::visualization_msgs::msg::{Marker, MarkerArray};
@@ -74,22 +74,7 @@ pub fn transform_stamped(
     transform: &Isometry3<f64>,
     stamp: Time,
 ) -> TransformStamped {
-    let p = convert::pose(transform);
-    TransformStamped {
-        header: Header {
-            stamp,
-            frame_id: parent.into(),
-        },
-        child_frame_id: child.into(),
-        transform: Transform {
-            translation: Vector3 {
-                x: p.position.x,
-                y: p.position.y,
-                z: p.position.z,
-            },
-            rotation: p.orientation,
-        },
-    }
+    convert::transform_in(parent, child, &convert::pose(transform), stamp)
 }
 
 /// The colour a part is drawn in, by its group (the name before `/`).
