@@ -24,24 +24,11 @@ import threading
 import time
 from pathlib import Path
 
+from node_suite import node_processes
+
 HORIZON = 500
 PAGE = os.sysconf("SC_PAGE_SIZE")
 TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def recorder_pid(bag: Path) -> int | None:
-    """The recorder node writing `bag` (`composuite node recorder ... -p output:=BAG`)."""
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            argv = (entry / "cmdline").read_bytes().split(b"\0")
-        except OSError:
-            continue
-        text = b" ".join(argv).decode(errors="replace")
-        if " node recorder " in text and f"output:={bag}" in text:
-            return int(entry.name)
-    return None
 
 
 def sample(pid: int) -> tuple[float, int] | None:
@@ -67,7 +54,8 @@ class RecorderWatch(threading.Thread):
     def run(self) -> None:
         pid = None
         while self.session.poll() is None and pid is None:
-            pid = recorder_pid(self.bag)
+            # The recorder node writing this session's bag (`... -p output:=BAG`).
+            pid = next(iter(node_processes(f"output:={self.bag}", "recorder")), None)
             time.sleep(0.05)
         while pid is not None and self.session.poll() is None:
             got = sample(pid)
@@ -153,8 +141,11 @@ def main() -> None:
         print(json.dumps(summary, indent=2))
         return
     print(f"{args.task}, policy {args.policy}, {episodes * HORIZON} steps per run, median of {args.rounds}:")
-    print(f"  lockstep steps/s without recording {plain:.0f}, recording {with_bag:.0f} "
-          f"(recording costs {summary['recording_cost_percent']:.1f} %)")
+    if args.record_only:
+        print(f"  lockstep steps/s recording {with_bag:.0f}")
+    else:
+        print(f"  lockstep steps/s without recording {plain:.0f}, recording {with_bag:.0f} "
+              f"(recording costs {summary['recording_cost_percent']:.1f} %)")
     print(f"  bag: {summary['bag_bytes_per_step']:.0f} bytes per env step (zstd-compressed MCAP)")
     if "recorder_cpu_percent" in summary:
         print(f"  recorder (last run): CPU {summary['recorder_cpu_percent']:.0f} % of a core, RSS "

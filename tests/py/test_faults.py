@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from node_suite import Launched, env_replay_run, float_bits, ns_of
-from ros_agent import Agent, LockstepClient
+from ros_agent import Agent, LockstepClient, stamped
 
 TASK = "Gen3/box/object_wall/pick_place"
 STEP_TIMEOUT = 5.0
@@ -177,7 +177,7 @@ def test_a_killed_reward_node_is_started_again_and_rewards_follow_the_next_reset
 
 AGENT = textwrap.dedent("""
     import random, sys
-    from ros_agent import Agent, LockstepClient
+    from ros_agent import Agent, LockstepClient, stamped
     namespace, domain = sys.argv[1], int(sys.argv[2])
     with Agent(namespace=namespace, domain_id=domain) as agent:
         client = LockstepClient(agent)
@@ -217,8 +217,6 @@ def test_an_agent_killed_mid_episode_leaves_the_suite_serving_the_next(launched,
 def test_a_command_stamped_before_the_episode_began_does_not_step_it(launched, stepper):
     """A joint_command answering an earlier episode's observation (in flight from an agent that
     died while another reset) is dropped with a log line; one answering this episode's steps it."""
-    from ros_agent import stamped
-
     stepper.reset(seed=3)
     old = stepper.since  # this episode's step-0 stamp
     stepper.random_step()

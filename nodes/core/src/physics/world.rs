@@ -291,22 +291,16 @@ impl SimWorld {
         mb.set_self_contacts_enabled(false);
         for (j, &link) in link_ids.iter().enumerate() {
             let dof = mb.link(link).expect("link").assembly_id();
-            let arm_joint = j < ARM_DOF;
-            mb.armature_mut()[dof] = if arm_joint {
-                self.gains.armature[j]
+            // The finger joints get none: their servos alone set how they move.
+            let (armature, damping, friction) = if j < ARM_DOF {
+                let g = &self.gains;
+                (g.armature[j], g.damping[j], g.frictionloss)
             } else {
-                0.0
-            } as Real;
-            mb.damping_mut()[dof] = if arm_joint {
-                self.gains.damping[j]
-            } else {
-                0.0
-            } as Real;
-            mb.frictions_mut()[dof] = if arm_joint {
-                self.gains.frictionloss
-            } else {
-                0.0
-            } as Real;
+                (0.0, 0.0, 0.0)
+            };
+            mb.armature_mut()[dof] = armature as Real;
+            mb.damping_mut()[dof] = damping as Real;
+            mb.frictions_mut()[dof] = friction as Real;
         }
         // The fingers move as one: q_right = −q_left (a mimic joint).
         let left = self.link_id(ARM_DOF);
@@ -432,29 +426,6 @@ impl SimWorld {
         self.servo_mode
     }
 
-    /// Each arm joint's inertia about its axis with the joints below it locked, plus its
-    /// armature (kg·m²): the diagonal of the joint-space mass matrix.
-    pub fn joint_inertias(&self) -> [f64; ARM_DOF] {
-        let bodies = &self.physics.bodies;
-        let mut inertia = [0.0; ARM_DOF];
-        for (j, joint) in self.model.joints.iter().enumerate().take(ARM_DOF) {
-            let frame = from_pose(bodies[self.arm.bodies[joint.child]].position());
-            let axis = frame.rotation * joint.axis;
-            let anchor = frame.translation.vector;
-            inertia[j] = self.gains.armature[j];
-            for &b in &self.arm.downstream[j] {
-                let model = &self.model.bodies[b];
-                let pose = from_pose(bodies[self.arm.bodies[b]].position());
-                let r = pose.rotation.to_rotation_matrix();
-                let world_inertia = r.matrix() * model.inertia * r.matrix().transpose();
-                let com = pose * nalgebra::Point3::from(model.com);
-                let arm = axis.cross(&(com.coords - anchor));
-                inertia[j] += axis.dot(&(world_inertia * axis)) + model.mass * arm.norm_squared();
-            }
-        }
-        inertia
-    }
-
     /// Command the gripper.
     pub fn set_gripper(&mut self, command: GripperCommand) {
         self.gripper_command = command;
@@ -490,13 +461,9 @@ impl SimWorld {
         let gripper_targets = self.finger_targets();
         // The reference controller drives the joints with torques; the stiff servos with
         // rapier's joint motors (implicit springs), gravity fed forward through their set points.
-        let reference_torques = match self.servo_mode {
-            ServoMode::Reference => Some(self.reference_torques()),
-            ServoMode::Stiff => None,
-        };
-        let tau_g = match self.servo_mode {
-            ServoMode::Stiff => self.gravity_torques(),
-            ServoMode::Reference => [0.0; ARM_DOF],
+        let (reference_torques, tau_g) = match self.servo_mode {
+            ServoMode::Reference => (Some(self.reference_torques()), [0.0; ARM_DOF]),
+            ServoMode::Stiff => (None, self.gravity_torques()),
         };
         let (kp, kd) = (self.gains.kp, self.gains.kd);
         let gripper = &self.gripper;
