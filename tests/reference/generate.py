@@ -7,7 +7,7 @@ against. It is not part of the port and never runs in CI: it needs a Python 3.11
 the reference stack installed and a CompoSuite checkout on PYTHONPATH. `scripts/reference-data`
 sets both up; see tests/reference/README.md for the file formats.
 
-Three independent parts (select one with --only):
+Four independent parts (select one with --only):
 
   step0         every one of the 256 tasks x seeds 0..4: the observation right after reset and
                 the raw state behind it (joint angles, object pose, grip site, hand frame).
@@ -15,6 +15,8 @@ Three independent parts (select one with --only):
                 observation, reward, success, grasp flag, staged rewards and raw state per step.
   random        the same 16 tasks: episodes of uniformly random actions; per episode the return,
                 the success flags and the length.
+  spin          each object resting on bin 1's floor, turned by a torque about the vertical for
+                1 s: its yaw per control step (how much the contacts' torsional friction resists).
 
 All numbers are rounded to 7 decimals. Integral values are written without a decimal point.
 """
@@ -322,6 +324,73 @@ def composuite_source_hash(composuite):
                 with open(path, "rb") as f:
                     h.update(f.read())
     return h.hexdigest()
+
+
+# ------------------------------------------------------------------------------------------------
+# Spin: torsional friction, measured
+# ------------------------------------------------------------------------------------------------
+SPIN_TORQUES = [0.003, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 1.5, 2.0, 2.5]  # N*m about world z
+SPIN_SETTLE_STEPS = 10  # zero-action control steps before the torque
+SPIN_TORQUE_STEPS = 20  # control steps (1 s) with the torque on
+SPIN_AFTER_STEPS = 10  # control steps after it is removed
+SPIN_RULE = (
+    "IIWA/<object>/None/PickPlace, np.random.seed(0); reset(); 10 steps of the all-zero action; then "
+    "data.xfrc_applied[object body] = (0, 0, 0, 0, 0, torque) (a torque about world z at the body's "
+    "centre of mass) for 20 steps and 0 for 10 more, all-zero actions throughout. yaw[k] is the "
+    "object's rotation about world z after step k of those 30 (atan2 of its x axis, unwrapped), "
+    "relative to its yaw before the torque; z_end its origin's height after the last step")
+
+
+def yaw_of(quat_wxyz):
+    w, x, y, z = (float(v) for v in quat_wxyz)
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def run_spin(args, composuite):
+    t_start = time.time()
+    patterns = [p.lower() for p in args.tasks.split(",")] if args.tasks else []
+    objects = [o for o in OBJECTS if not patterns or any(p in o.lower() for p in patterns)]
+    records = []
+    for obj in objects:
+        ref = Reference(composuite, "IIWA", obj, "None", "PickPlace")
+        for torque in SPIN_TORQUES:
+            ref.reset(0)
+            zero = np.zeros(8)
+            for _ in range(SPIN_SETTLE_STEPS):
+                ref.gym.step(zero)
+            body = ref.env.obj_body_id
+            data = ref.sim.data
+            previous = yaw_of(data.body_xquat[body])
+            turned, yaws = 0.0, []
+            for k in range(SPIN_TORQUE_STEPS + SPIN_AFTER_STEPS):
+                data.xfrc_applied[body, :] = 0.0
+                data.xfrc_applied[body, 5] = torque if k < SPIN_TORQUE_STEPS else 0.0
+                ref.gym.step(zero)
+                now = yaw_of(data.body_xquat[body])
+                turned += (now - previous + math.pi) % (2.0 * math.pi) - math.pi
+                previous = now
+                yaws.append(r7(turned))
+            data.xfrc_applied[body, :] = 0.0
+            rec = task_record("IIWA", obj, "None", "PickPlace")
+            rec.update({"seed": 0, "torque": torque, "yaw": yaws,
+                        "z_end": r7(float(data.body_xpos[body][2]))})
+            records.append(rec)
+            log(f"spin: {rec['name']} torque {torque}: yaw after 1 s {yaws[SPIN_TORQUE_STEPS - 1]:+.4f} rad")
+        ref.close()
+    meta = base_meta(args, composuite, "spin")
+    meta.update({
+        "rule": SPIN_RULE,
+        "torques": SPIN_TORQUES,
+        "settle_steps": SPIN_SETTLE_STEPS,
+        "torque_steps": SPIN_TORQUE_STEPS,
+        "after_steps": SPIN_AFTER_STEPS,
+        "elapsed_seconds": round(time.time() - t_start, 1),
+    })
+    path = os.path.join(args.out, "spin.json")
+    with open(path, "w") as f:
+        json.dump({"meta": meta, "records": records}, f, indent=1, allow_nan=False)
+        f.write("\n")
+    log(f"wrote {path} ({os.path.getsize(path)} bytes)")
 
 
 def base_meta(args, composuite, part):
@@ -633,14 +702,15 @@ def main():
             "scripts/reference-data prepares that and forwards its arguments here. Parts, in the order "
             "they run: trajectories (16 tasks x 2 seeds x 100 fixed steps, ~2 min), step0 (256 tasks x "
             "5 seeds, reset observations, ~40 min: every make/reset recompiles the model), random "
-            "(16 tasks x N random-action episodes of 500 steps, ~2 min per episode per 16 tasks)."),
-        epilog="Outputs: OUT/trajectories.json.gz, OUT/step0.json.gz, OUT/random_returns.json. "
+            "(16 tasks x N random-action episodes of 500 steps, ~2 min per episode per 16 tasks), spin "
+            "(4 objects x 11 torques, ~2 min)."),
+        epilog="Outputs: OUT/trajectories.json.gz, OUT/step0.json.gz, OUT/random_returns.json, OUT/spin.json. "
                "See tests/reference/README.md for the formats.",
     )
     parser.add_argument("--out", default=os.path.join(here, "data"),
                         help="output folder (default: the data/ folder next to this script)")
-    parser.add_argument("--only", choices=["step0", "trajectories", "random"],
-                        help="run only this part (default: all three)")
+    parser.add_argument("--only", choices=["step0", "trajectories", "random", "spin"],
+                        help="run only this part (default: all four)")
     parser.add_argument("--tasks", default=None,
                         help="comma-separated case-insensitive substrings; keep only tasks whose port name "
                              "(e.g. Gen3/hollow_box/goal_wall/shelf) or reference name "
@@ -660,11 +730,12 @@ def main():
     import composuite
 
     os.makedirs(args.out, exist_ok=True)
-    parts = [args.only] if args.only else ["trajectories", "step0", "random"]
+    parts = [args.only] if args.only else ["trajectories", "step0", "random", "spin"]
     for part in parts:
         t0 = time.time()
         log(f"part {part}: start")
-        {"step0": run_step0, "trajectories": run_trajectories, "random": run_random}[part](args, composuite)
+        {"step0": run_step0, "trajectories": run_trajectories, "random": run_random,
+         "spin": run_spin}[part](args, composuite)
         log(f"part {part}: done in {time.time() - t0:.0f}s")
 
 

@@ -27,6 +27,9 @@ pub struct ObjectGeometry {
     /// The goal marker's primitives in its body frame (non-colliding; slightly different
     /// sizes for the plate and the dumbbell, docs/reference-facts.md §3 notes).
     pub marker_parts: &'static [Part],
+    /// MuJoCo's contact dimensionality of its geoms (docs/reference-facts.md §3): 3 is sliding
+    /// friction only; 4 adds torsional friction (the dumbbell and the plate).
+    pub condim: u32,
     /// How many 0.001 kg material copies the compiled model carries
     /// (docs/reference-facts.md §3 notes).
     pub material_copies: u32,
@@ -43,6 +46,24 @@ impl ObjectGeometry {
     pub fn mass(&self) -> f64 {
         let volume: f64 = self.parts.iter().map(|part| part.shape.volume()).sum();
         OBJECT_DENSITY * volume + f64::from(self.material_copies) * MATERIAL_COPY_MASS
+    }
+
+    /// Torsional friction coefficient (m) of each collision primitive, in the order of `parts`:
+    /// its own torsional friction with condim 4, none with condim 3. MuJoCo takes the larger of
+    /// the two geoms' coefficients, and every geom an object can touch has 0.005 or (the finger
+    /// pads) 0, never more than the object's own, so the object's value is the contact's.
+    pub fn torsional_coefficients(&self) -> Vec<f64> {
+        self.parts
+            .iter()
+            .filter(|part| part.collides)
+            .map(|part| {
+                if self.condim >= 4 {
+                    part.friction.torsion
+                } else {
+                    0.0
+                }
+            })
+            .collect()
     }
 
     /// World z of the origin when the object starts on bin 1's floor (docs/reference-facts.md §2.2,
@@ -117,6 +138,7 @@ const BOX: ObjectGeometry = ObjectGeometry {
     object: Object::Box,
     parts: &[BOX_BODY],
     marker_parts: &[visual(BOX_BODY, "goal/body")],
+    condim: 3,
     material_copies: 1,
     bottom_offset: -0.03,
     top_offset: 0.03,
@@ -141,6 +163,7 @@ const HOLLOW_BOX: ObjectGeometry = ObjectGeometry {
     ],
     // Five collision geoms but four copies: the runtime mass is 0.288 + 0.004
     // (docs/reference-facts.md §3).
+    condim: 3,
     material_copies: 4,
     bottom_offset: -0.008,
     top_offset: 0.068,
@@ -154,6 +177,7 @@ const PLATE: ObjectGeometry = ObjectGeometry {
         visual(MARKER_PLATE_STEM, "goal/stem"),
         visual(MARKER_PLATE_DISC, "goal/disc"),
     ],
+    condim: 4,
     material_copies: 2,
     bottom_offset: -0.02,
     top_offset: 0.034,
@@ -168,6 +192,7 @@ const DUMBBELL: ObjectGeometry = ObjectGeometry {
         visual(MARKER_DUMBBELL_DISC_Z_POS, "goal/disc_z+"),
         visual(MARKER_DUMBBELL_DISC_Z_NEG, "goal/disc_z-"),
     ],
+    condim: 4,
     material_copies: 3,
     bottom_offset: -0.052,
     top_offset: 0.052,

@@ -17,7 +17,7 @@ mod world_state;
 
 use std::fmt;
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Point3, Vector3};
 
 pub use action::Action;
 pub use layout::EpisodeLayout;
@@ -432,6 +432,13 @@ impl Env {
     /// Every static solid, the object at its start pose, and the goal marker, in the world.
     pub fn scene_parts(&self) -> Vec<Placed> {
         self.layout().parts()
+    }
+
+    /// Hold a torque (N·m, world frame) on the object about its centre of mass — MuJoCo's
+    /// `xfrc_applied`, for test rigs and disturbance studies. It lasts until changed or until
+    /// the next reset; an episode disturbed this way is not reproducible from its actions alone.
+    pub fn set_object_torque(&mut self, torque: Vector3<f64>) {
+        self.world.set_object_torque(torque);
     }
 
     /// The simulated world (read only; commands go through [`Env::step`]).

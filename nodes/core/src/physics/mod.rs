@@ -8,6 +8,7 @@ mod arm_dynamics;
 mod params;
 mod robot_model;
 mod tags;
+mod torsion;
 mod world;
 
 pub use arm_dynamics::{ArmDynamics, ArmState, arm_dynamics};
@@ -17,6 +18,7 @@ pub use robot_model::{
     LinkJoint, ModelError, RobotModel, Shape, build_model, robot_description, robot_model,
 };
 pub use tags::{ColliderTag, Side};
+pub use torsion::TorsionalFriction;
 pub use world::{
     ARM_DOF, ArmHandles, FINGER_OPEN, FingerContacts, GripperCommand, ServoMode, SimWorld,
     finger_for_gap, from_pose, pad_gap, to_pose,

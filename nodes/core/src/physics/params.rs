@@ -93,6 +93,9 @@ pub struct GripperParams {
     /// How far past a closed-on-nothing position the servo aims when closing (m), so the grip
     /// force saturates at `max_force` instead of depending on where the object stopped the pads.
     pub close_overshoot: f64,
+    /// Dry friction of each finger joint (N): the reference's `frictionloss` 1
+    /// (docs/reference-facts.md §4.4).
+    pub frictionloss: f64,
 }
 
 impl Default for GripperParams {
@@ -102,6 +105,7 @@ impl Default for GripperParams {
             kd: 100.0,
             max_force: 20.0,
             close_overshoot: 0.01,
+            frictionloss: 1.0,
         }
     }
 }

@@ -11,6 +11,7 @@ use super::robot_model::{
     robot_model,
 };
 use super::tags::{ColliderTag, Side};
+use super::torsion::TorsionalFriction;
 use crate::arena::{Placed, Primitive, merged_solids, object_geometry, robot_base_pose};
 use crate::axes::{Object, Robot};
 
@@ -142,6 +143,8 @@ pub struct SimWorld {
     servo_mode: ServoMode,
     /// The object body, if one was added.
     pub object: Option<RigidBodyHandle>,
+    /// The object's torsional friction (none until an object with it is added).
+    torsion: TorsionalFriction,
     /// Physics steps taken.
     pub steps: u64,
 }
@@ -270,6 +273,7 @@ impl SimWorld {
             gripper_c: 0.0,
             servo_mode: ServoMode::Stiff,
             object: None,
+            torsion: TorsionalFriction::default(),
             steps: 0,
         };
         world.configure_joints();
@@ -291,12 +295,13 @@ impl SimWorld {
         mb.set_self_contacts_enabled(false);
         for (j, &link) in link_ids.iter().enumerate() {
             let dof = mb.link(link).expect("link").assembly_id();
-            // The finger joints get none: their servos alone set how they move.
+            // The finger joints get no armature or damping (their servos set how they move),
+            // only the reference's dry friction.
             let (armature, damping, friction) = if j < ARM_DOF {
                 let g = &self.gains;
                 (g.armature[j], g.damping[j], g.frictionloss)
             } else {
-                (0.0, 0.0, 0.0)
+                (0.0, 0.0, self.gripper.frictionloss)
             };
             mb.armature_mut()[dof] = armature as Real;
             mb.damping_mut()[dof] = damping as Real;
@@ -604,6 +609,9 @@ impl SimWorld {
     /// One physics step.
     pub fn step(&mut self) {
         self.update_servos();
+        if let Some(object) = self.object {
+            self.torsion.update(&mut self.physics, object);
+        }
         self.physics.step();
         self.steps += 1;
     }
@@ -680,6 +688,7 @@ impl SimWorld {
             Some(body),
         );
         self.object = Some(body);
+        self.torsion = TorsionalFriction::new(geometry.torsional_coefficients());
         body
     }
 
@@ -689,6 +698,15 @@ impl SimWorld {
             body.set_position(to_pose(pose), true);
             body.set_linvel(Vector::ZERO, true);
             body.set_angvel(Vector::ZERO, true);
+        }
+    }
+
+    /// Hold a torque (N·m, world frame) on the object about its centre of mass until it is
+    /// changed — MuJoCo's `xfrc_applied`, for test rigs and disturbance studies.
+    pub fn set_object_torque(&mut self, torque: Vector3<f64>) {
+        if let Some(body) = self.object.and_then(|h| self.physics.bodies.get_mut(h)) {
+            body.reset_torques(false);
+            body.add_torque(to_vec(&torque), true);
         }
     }
 
@@ -751,6 +769,7 @@ impl SimWorld {
             gripper_c: self.gripper_c,
             servo_mode: self.servo_mode,
             object: self.object,
+            torsion: self.torsion.clone(),
             steps: 0,
         }
     }

@@ -351,3 +351,82 @@ pub fn random_episode(task: TaskSpec, episode: &RandomEpisode) -> (f64, bool, u3
     }
     (env.episode_return(), env.success_seen(), env.steps())
 }
+
+/// One recorded spin (`spin.json`): an object resting on bin 1's floor turned by a torque about
+/// world z for `torque_steps` control steps, then left alone for `after_steps`.
+pub struct Spin {
+    pub task: TaskSpec,
+    pub seed: u64,
+    /// N·m about world z, at the object's centre of mass.
+    pub torque: f64,
+    /// Zero-action control steps before the torque.
+    pub settle_steps: usize,
+    /// Control steps with the torque on.
+    pub torque_steps: usize,
+    /// The object's yaw (rad, unwrapped) after each step with and after the torque, relative to
+    /// its yaw before it.
+    pub yaw: Vec<f64>,
+    /// The height of the object's origin after the last step (m): it stays on the floor unless
+    /// the spin threw it out.
+    pub z_end: f64,
+}
+
+impl Spin {
+    /// The yaw after the torque's last step.
+    pub fn turned(yaw: &[f64], torque_steps: usize) -> f64 {
+        yaw[torque_steps - 1]
+    }
+
+    /// The port's run of the same rig: its yaw per step and final height, as recorded for the
+    /// reference.
+    pub fn ours(&self) -> (Vec<f64>, f64) {
+        let mut env = Env::new(self.task, EnvConfig::default());
+        env.reset(self.seed).expect("reset");
+        let zero = Action::Reference([0.0; 8]);
+        for _ in 0..self.settle_steps {
+            env.step(&zero).expect("step");
+        }
+        let yaw_now = |env: &Env| {
+            let r = env.world().object_pose().expect("object").rotation;
+            let x = r * Vector3::x();
+            x.y.atan2(x.x)
+        };
+        let mut previous = yaw_now(&env);
+        let mut turned = 0.0;
+        let mut yaws = Vec::with_capacity(self.yaw.len());
+        for k in 0..self.yaw.len() {
+            let torque = if k < self.torque_steps { self.torque } else { 0.0 };
+            env.set_object_torque(Vector3::new(0.0, 0.0, torque));
+            env.step(&zero).expect("step");
+            let now = yaw_now(&env);
+            let pi = std::f64::consts::PI;
+            turned += (now - previous + pi).rem_euclid(2.0 * pi) - pi;
+            previous = now;
+            yaws.push(turned);
+        }
+        let z_end = env.world().object_pose().expect("object").translation.z;
+        (yaws, z_end)
+    }
+}
+
+/// Every recorded spin.
+pub fn spins() -> Vec<Spin> {
+    let data = load("spin.json");
+    let meta = &data["meta"];
+    let count = |key: &str| meta[key].as_u64().expect("step count") as usize;
+    let (settle_steps, torque_steps) = (count("settle_steps"), count("torque_steps"));
+    data["records"]
+        .as_array()
+        .expect("records")
+        .iter()
+        .map(|r| Spin {
+            task: task(r),
+            seed: r["seed"].as_u64().expect("seed"),
+            torque: r["torque"].as_f64().expect("torque"),
+            settle_steps,
+            torque_steps,
+            yaw: floats(&r["yaw"]),
+            z_end: r["z_end"].as_f64().expect("z_end"),
+        })
+        .collect()
+}
