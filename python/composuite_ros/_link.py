@@ -25,14 +25,14 @@ from dataclasses import dataclass
 import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
-from composuite_msgs.msg import EpisodeStatus, Observation, StagedReward
+from composuite_msgs.msg import EpisodeStatus, Observation, ReferenceAction, StagedReward
 from composuite_msgs.srv import Reset, SampleTasks, SetTask
 from rclpy.context import Context
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray, Header, String
+from std_msgs.msg import Header, String
 
 from ._cdr import FieldReader
 from .errors import StepLostError, SuiteNotRunningError
@@ -176,8 +176,10 @@ class Channel:
                 event_callbacks=no_sub_events),
         }
         self.description = None  # robot_description, subscribed when first needed
+        # Stamped, so the sim drops an action sent for an earlier episode.
         self.reference_action = node.create_publisher(
-            Float64MultiArray, f"{prefix}/reference_action", STATE_QOS, event_callbacks=no_pub_events)
+            ReferenceAction, f"{prefix}/reference_action_stamped", STATE_QOS,
+            event_callbacks=no_pub_events)
         self.joint_command = node.create_publisher(
             JointState, f"{prefix}/joint_command", STATE_QOS, event_callbacks=no_pub_events)
         self.reset_client = node.create_client(Reset, f"{prefix}/reset")
@@ -185,8 +187,8 @@ class Channel:
         self.sample_tasks_client = node.create_client(SampleTasks, f"{prefix}/sample_tasks")
         self.episode = 0
         self.step_count = 0
-        # The stamp (sim time, ns) of the latest observation taken: joint commands carry it, so
-        # the sim drops one that arrives after another episode began.
+        # The stamp (sim time, ns) of the latest observation taken: commands carry it, so the
+        # sim drops one that arrives after another episode began.
         self.answered_ns = 0
 
     # ---- incoming ---------------------------------------------------------------------------
@@ -331,12 +333,17 @@ class Channel:
         key = (self.episode, 0)
         return key in self.observations and key in self.rewards and key in self.statuses
 
+    def answered_header(self) -> Header:
+        """A header stamped with the observation the next command answers."""
+        return Header(stamp=Time(sec=self.answered_ns // 1_000_000_000,
+                                 nanosec=self.answered_ns % 1_000_000_000))
+
     def send_reference_action(self, action) -> None:
-        self.reference_action.publish(Float64MultiArray(data=[float(a) for a in action]))
+        self.reference_action.publish(ReferenceAction(header=self.answered_header(),
+                                                      action=[float(a) for a in action]))
 
     def send_joint_targets(self, names: list[str], positions) -> None:
-        stamp = Time(sec=self.answered_ns // 1_000_000_000, nanosec=self.answered_ns % 1_000_000_000)
-        self.joint_command.publish(JointState(header=Header(stamp=stamp), name=names,
+        self.joint_command.publish(JointState(header=self.answered_header(), name=names,
                                               position=[float(p) for p in positions]))
 
     def next_key(self) -> tuple[int, int]:

@@ -229,3 +229,24 @@ def test_a_command_stamped_before_the_episode_began_does_not_step_it(launched, s
     for _ in range(5):
         stepper.random_step()  # stamped with this episode's observations: each steps it
     stepper.assert_like_the_reference()
+
+
+def test_a_reference_action_stamped_before_the_episode_began_does_not_step_it(launched, stepper):
+    """The same for the reference benchmark's action (`reference_action_stamped`, what the
+    Gymnasium package sends): one answering an earlier episode is dropped with a log line; one
+    answering this episode's step-0 observation steps it, and an unstamped one is taken."""
+    actions = stepper.agent.publisher("reference_action_stamped", "composuite_msgs/msg/ReferenceAction")
+    actions.wait_for_subscribers(1, timeout=20)
+    stepper.reset(seed=3)
+    old = stepper.since
+    stepper.random_step()
+    stepper.reset(seed=4)
+    hold = [0.0] * 8
+    actions.publish(header=stamped(old), action=hold)
+    launched.wait_for_log("reference_action_stamped dropped")
+    with pytest.raises(TimeoutError):
+        stepper.observations.wait_for(stepper.this_episode(1), timeout=1.0)
+    actions.publish(header=stamped(stepper.since), action=hold)
+    stepper.observations.wait_for(stepper.this_episode(1), timeout=STEP_TIMEOUT)
+    actions.publish(action=hold)  # unstamped
+    stepper.observations.wait_for(stepper.this_episode(2), timeout=STEP_TIMEOUT)

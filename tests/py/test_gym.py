@@ -171,7 +171,7 @@ def test_close_leaves_no_thread_or_endpoint(env, suite):
     before = threading.active_count()
     probe = composuite_ros._link.Participant("probe")
     try:
-        topic = "/gym/reference_action"
+        topic = "/gym/reference_action_stamped"
         baseline = 1
         assert probe.spin_for(lambda: probe.node.count_publishers(topic) == baseline, 20.0), \
             "the probe never discovered the module env's publisher"

@@ -111,9 +111,9 @@ def test_type_hashes_equal_jazzy_generator_output(described):
     ours.update({n: v["type_hash"] for n, v in described["services"].items()})
     compared = [n for n in ours if n in expected]
     assert [n for n in compared if ours[n] != expected[n]] == []
-    # every composuite type (12 msgs, 3 services with request/response/event) and the standard ones
-    assert sum(n.startswith("composuite_msgs/") for n in compared) == 12 + 3 * 4
-    assert len(compared) >= 24 + 13
+    # every composuite type (13 msgs, 3 services with request/response/event) and the standard ones
+    assert sum(n.startswith("composuite_msgs/") for n in compared) == 13 + 3 * 4
+    assert len(compared) >= 25 + 13
     # the scene markers' types, against the ros-jazzy-visualization-msgs wheel
     assert {"visualization_msgs/msg/MarkerArray", "visualization_msgs/msg/Marker", "visualization_msgs/msg/MeshFile",
             "visualization_msgs/msg/UVCoordinate", "sensor_msgs/msg/CompressedImage",

@@ -46,6 +46,8 @@ TOPICS = {
     "joint_states": (JOINT_STATE, "publication", STATE),
     "joint_command": (JOINT_STATE, "subscription", STATE),
     "gripper_command": ("control_msgs/msg/GripperCommand", "subscription", STATE),
+    "reference_action": ("std_msgs/msg/Float64MultiArray", "subscription", STATE),
+    "reference_action_stamped": ("composuite_msgs/msg/ReferenceAction", "subscription", STATE),
     "observation": ("composuite_msgs/msg/Observation", "publication", STATE),
     "world_state": ("composuite_msgs/msg/WorldState", "publication", STATE),
     "scene": ("composuite_msgs/msg/Scene", "publication", LATCHED),

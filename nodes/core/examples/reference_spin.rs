@@ -9,7 +9,9 @@
 mod reference;
 
 fn main() {
-    println!("| task | torque (N·m) | yaw after 1 s, reference | ours | z at the end, reference | ours |");
+    println!(
+        "| task | torque (N·m) | yaw after 1 s, reference | ours | z at the end, reference | ours |"
+    );
     println!("|---|---|---|---|---|---|");
     for spin in reference::spins() {
         let (ours, z_end) = spin.ours();

@@ -395,7 +395,11 @@ impl Spin {
         let mut turned = 0.0;
         let mut yaws = Vec::with_capacity(self.yaw.len());
         for k in 0..self.yaw.len() {
-            let torque = if k < self.torque_steps { self.torque } else { 0.0 };
+            let torque = if k < self.torque_steps {
+                self.torque
+            } else {
+                0.0
+            };
             env.set_object_torque(Vector3::new(0.0, 0.0, torque));
             env.step(&zero).expect("step");
             let now = yaw_now(&env);

@@ -9,6 +9,8 @@ pub const JOINT_COMMAND: &str = "joint_command";
 /// The reference benchmark's 8 action values in [−1, 1] (std_msgs/Float64MultiArray): joint
 /// deltas of 0.05 rad per unit from the measured positions, then the gripper's sign; agents → sim.
 pub const REFERENCE_ACTION: &str = "reference_action";
+/// The same action stamped with the observation it answers (`composuite_msgs/ReferenceAction`).
+pub const REFERENCE_ACTION_STAMPED: &str = "reference_action_stamped";
 /// Gripper opening and effort (control_msgs/GripperCommand), agents → sim.
 pub const GRIPPER_COMMAND: &str = "gripper_command";
 /// Factored observation (composuite_msgs/Observation), sim → agents.

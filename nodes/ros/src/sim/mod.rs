@@ -5,15 +5,17 @@
 //!   changes, then reset with the scene's seed; the sim time goes on from the scene's stamp
 //!   if that is later (a restarted sim);
 //! - `joint_command` (absolute targets by joint name; may carry the finger joints) and
-//!   `gripper_command` (opening, effort) set the targets; `reference_action` (8 values in
-//!   [−1, 1]) acts as the reference benchmark's agents do (joint deltas + gripper sign, its
-//!   soft controller), so a Gymnasium agent written for CompoSuite sees the same environment;
+//!   `gripper_command` (opening, effort) set the targets; `reference_action_stamped` and
+//!   `reference_action` (8 values in [−1, 1], with and without a header) act as the reference
+//!   benchmark's agents do (joint deltas + gripper sign, its soft controller), so a Gymnasium
+//!   agent written for CompoSuite sees the same environment. A stamped command answering an
+//!   observation from before the current episode is dropped;
 //! - ros2_control's controllers ([`controllers`], chosen by the `controllers` parameter):
 //!   `joint_trajectory_controller/{follow_joint_trajectory,joint_trajectory}`,
 //!   `forward_position_controller/commands`, `gripper_action_controller/gripper_cmd`, and
 //!   `controller_manager/{list_controllers,list_hardware_interfaces}`;
 //! - every period runs read → update → write on one timestamp through the [`hardware`] seam;
-//! - `lockstep` mode: each `joint_command`, `reference_action` or forward command advances exactly
+//! - `lockstep` mode: each `joint_command`, reference action or forward command advances exactly
 //!   one control period; a trajectory or gripper goal (or topic trajectory) advances the sim
 //!   itself, one period per update, until it is decided; nothing else advances it. `realtime`
 //!   mode: a wall-clock timer steps with the last command held and running goals updated;
@@ -38,6 +40,7 @@ use std::time::{Duration, Instant};
 use composuite_core::TaskSpec;
 use composuite_core::env::{Env, EnvConfig, EnvError};
 use composuite_core::physics::{ARM_DOF, RobotModel, robot_description, robot_model};
+use composuite_msgs::builtin_interfaces::msg::Time as BuiltinTime;
 use composuite_msgs::control_msgs::action::{
     FollowJointTrajectoryFeedback, FollowJointTrajectoryGoal, FollowJointTrajectoryResult,
     GripperCommandFeedback, GripperCommandGoal, GripperCommandResult,
@@ -184,8 +187,8 @@ struct Running {
     over_reported: bool,
     /// Whether this episode's object markers went out yet (the first clears the old ones).
     object_drawn: bool,
-    /// The sim time of the episode's step 0 (ns): a `joint_command` stamped earlier was meant
-    /// for an earlier episode.
+    /// The sim time of the episode's step 0 (ns): a command stamped earlier was meant for an
+    /// earlier episode.
     started_ns: u64,
 }
 
@@ -193,6 +196,23 @@ impl Running {
     fn model(&self) -> &'static RobotModel {
         self.env.world().model
     }
+}
+
+/// Whether a command stamped `stamp` answers an observation from before this episode began —
+/// e.g. sent by an agent that died with it in flight while another reset — and must not step
+/// this one (said in the log). Agents stamp a command with the observation it answers; a zero
+/// stamp (unstamped) is always taken.
+fn sent_for_earlier_episode(run: &Running, stamp: &BuiltinTime, what: &str, log: &Logger) -> bool {
+    let stamp = convert::nanos_of(stamp);
+    let stale = stamp != 0 && stamp < run.started_ns;
+    if stale {
+        log.warn(format!(
+            "{what} dropped: stamped {stamp}, before this episode began at {} (sim time, ns): \
+             it answers an earlier episode's observation",
+            run.started_ns
+        ));
+    }
+    stale
 }
 
 /// In lockstep, how long past its end a trajectory goal with goal tolerances and no goal time
@@ -294,6 +314,9 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let action_sub = node
         .subscription::<Float64MultiArray>(names::REFERENCE_ACTION, qos::state())
         .map_err(e)?;
+    let stamped_action_sub = node
+        .subscription::<msg::ReferenceAction>(names::REFERENCE_ACTION_STAMPED, qos::state())
+        .map_err(e)?;
     let gripper_sub = node
         .subscription::<GripperCommand>(names::GRIPPER_COMMAND, qos::state())
         .map_err(e)?;
@@ -377,6 +400,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         let mut commands = std::pin::pin!(command_sub.async_stream());
         let mut grippers = std::pin::pin!(gripper_sub.async_stream());
         let mut actions = std::pin::pin!(action_sub.async_stream());
+        let mut stamped_actions = std::pin::pin!(stamped_action_sub.async_stream());
         let mut trajectories = std::pin::pin!(optional_stream(trajectory_sub.as_ref()));
         let mut forwards = std::pin::pin!(optional_stream(forward_sub.as_ref()));
         let trajectory_server = servers.trajectory.as_ref();
@@ -506,8 +530,23 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                     Err(err) => log.warn(format!("unreadable forward command dropped: {err:?}")),
                 },
                 action = actions.select_next_some() => match action {
-                    Ok((action, _)) => sim.on_reference_action(servers, &action, &log),
+                    Ok((action, _)) => sim.on_reference_action(
+                        servers, &action.data, None, names::REFERENCE_ACTION, &log,
+                    ),
                     Err(err) => log.warn(format!("unreadable reference_action dropped: {err:?}")),
+                },
+                action = stamped_actions.select_next_some() => match action {
+                    Ok((action, _)) => sim.on_reference_action(
+                        servers,
+                        &action.action,
+                        Some(&action.header.stamp),
+                        names::REFERENCE_ACTION_STAMPED,
+                        &log,
+                    ),
+                    Err(err) => log.warn(format!(
+                        "unreadable {} dropped: {err:?}",
+                        names::REFERENCE_ACTION_STAMPED
+                    )),
                 },
                 _ = ticker.next().fuse() => sim.advance(servers, Advance::Command, &log),
                 _ = goal_step.fuse() => sim.advance(servers, Advance::Goal, &log),
@@ -713,16 +752,7 @@ impl Sim {
         let Some(run) = self.episode_for("joint_command", log) else {
             return;
         };
-        // Agents stamp a command with the observation it answers (0 = unstamped, taken). One
-        // stamped before this episode began was sent for an earlier one — e.g. by an agent that
-        // died with it in flight while another reset — and must not step this one.
-        let stamp = convert::nanos_of(&command.header.stamp);
-        if stamp != 0 && stamp < run.started_ns {
-            log.warn(format!(
-                "joint_command dropped: stamped {}, before this episode began at {} \
-                 (sim time, ns): it answers an earlier episode's observation",
-                stamp, run.started_ns
-            ));
+        if sent_for_earlier_episode(run, &command.header.stamp, "joint_command", log) {
             return;
         }
         let state = read_env(&run.env, time_ns);
@@ -793,22 +823,29 @@ impl Sim {
         }
     }
 
+    /// A reference action from `what`: the unstamped topic's values, or the stamped one's with
+    /// the stamp of the observation it answers.
     fn on_reference_action(
         &mut self,
         servers: &ActionServers,
-        action: &Float64MultiArray,
+        action: &[f64],
+        stamp: Option<&BuiltinTime>,
+        what: &str,
         log: &Logger,
     ) {
-        let Some(run) = self.episode_for("reference_action", log) else {
+        let Some(run) = self.episode_for(what, log) else {
             return;
         };
-        let values: [f64; REFERENCE_ACTION_LEN] = match action.data.as_slice().try_into() {
+        if stamp.is_some_and(|stamp| sent_for_earlier_episode(run, stamp, what, log)) {
+            return;
+        }
+        let values: [f64; REFERENCE_ACTION_LEN] = match action.try_into() {
             Ok(values) => values,
             Err(_) => {
                 log.warn(format!(
-                    "reference_action refused: it has {} values; it needs {REFERENCE_ACTION_LEN} \
+                    "{what} refused: it has {} values; it needs {REFERENCE_ACTION_LEN} \
                      (7 joint deltas, then the gripper), each in [-1, 1]",
-                    action.data.len()
+                    action.len()
                 ));
                 return;
             }
@@ -817,14 +854,14 @@ impl Sim {
         // so the held command never holds a value the next step would refuse.
         if let Some((index, value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             log.warn(format!(
-                "reference_action refused: value {index} is {value}; each must be finite \
+                "{what} refused: value {index} is {value}; each must be finite \
                  (it is clipped to [-1, 1])"
             ));
             return;
         }
         let ended = run
             .controllers
-            .command_arm(ArmCommand::Reference(values), names::REFERENCE_ACTION);
+            .command_arm(ArmCommand::Reference(values), what);
         self.report(servers, ended, log);
         if self.mode == Mode::Lockstep {
             self.advance(servers, Advance::Command, log);
