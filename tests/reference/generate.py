@@ -386,11 +386,7 @@ def run_spin(args, composuite):
         "after_steps": SPIN_AFTER_STEPS,
         "elapsed_seconds": round(time.time() - t_start, 1),
     })
-    path = os.path.join(args.out, "spin.json")
-    with open(path, "w") as f:
-        json.dump({"meta": meta, "records": records}, f, indent=1, allow_nan=False)
-        f.write("\n")
-    log(f"wrote {path} ({os.path.getsize(path)} bytes)")
+    write_json(os.path.join(args.out, "spin.json"), {"meta": meta, "records": records})
 
 
 def base_meta(args, composuite, part):
@@ -421,6 +417,14 @@ def base_meta(args, composuite, part):
         "rounding": "floats rounded to 7 decimals; integral values written as ints",
         "task_filter": args.tasks,
     }
+
+
+def write_json(path, payload):
+    """Plain, indented JSON (the small files, meant to be read by people too)."""
+    with open(path, "w") as f:
+        json.dump(payload, f, indent=1, allow_nan=False)
+        f.write("\n")
+    log(f"wrote {path} ({os.path.getsize(path)} bytes)")
 
 
 def write_json_gz(path, payload):
@@ -684,11 +688,7 @@ def run_random(args, composuite):
         },
         "elapsed_seconds": round(time.time() - t_start, 1),
     })
-    path = os.path.join(args.out, "random_returns.json")
-    with open(path, "w") as f:
-        json.dump({"meta": meta, "tasks": results}, f, indent=1, allow_nan=False)
-        f.write("\n")
-    log(f"wrote {path} ({os.path.getsize(path)} bytes)")
+    write_json(os.path.join(args.out, "random_returns.json"), {"meta": meta, "tasks": results})
     os.remove(partial_path)
 
 
