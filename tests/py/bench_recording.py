@@ -27,6 +27,8 @@ from pathlib import Path
 from node_suite import node_processes
 
 HORIZON = 500
+# For the soak's progress lines only: bag bytes per env step measured on the default session.
+BYTES_PER_STEP_GUESS = 558
 PAGE = os.sysconf("SC_PAGE_SIZE")
 TICKS = os.sysconf("SC_CLK_TCK")
 
@@ -43,13 +45,23 @@ def sample(pid: int) -> tuple[float, int] | None:
 
 
 class RecorderWatch(threading.Thread):
-    """Samples the session's recorder once a second until it exits."""
+    """Samples the session's recorder once a second until it exits; with `report_every` > 0 also
+    prints the recorder's and the sim's RSS and the bag's size that often (a soak)."""
 
-    def __init__(self, session: subprocess.Popen, bag: Path):
+    def __init__(self, session: subprocess.Popen, bag: Path, report_every: float = 0.0):
         super().__init__(daemon=True)
         self.session = session
         self.bag = bag
+        self.report_every = report_every
         self.samples: list[tuple[float, float, int]] = []  # (wall, cpu s, rss bytes)
+
+    def report(self, started: float, rss: int) -> None:
+        sim = next(iter(node_processes("", "sim")), None)
+        sim_rss = sample(sim) if sim else None
+        bag = sum(f.stat().st_size for f in self.bag.iterdir()) if self.bag.is_dir() else 0
+        print(f"rss: {time.monotonic() - started:7.0f} s  recorder {rss / 1e6:.1f} MB  "
+              f"sim {sim_rss[1] / 1e6 if sim_rss else float('nan'):.1f} MB  bag {bag / 1e6:.0f} MB "
+              f"(~{bag / BYTES_PER_STEP_GUESS / 1e3:.0f} k steps)", file=sys.stderr, flush=True)
 
     def run(self) -> None:
         pid = None
@@ -57,23 +69,27 @@ class RecorderWatch(threading.Thread):
             # The recorder node writing this session's bag (`... -p output:=BAG`).
             pid = next(iter(node_processes(f"output:={self.bag}", "recorder")), None)
             time.sleep(0.05)
+        started = last_report = time.monotonic()
         while pid is not None and self.session.poll() is None:
             got = sample(pid)
             if got is None:
                 break
             self.samples.append((time.monotonic(), *got))
+            if self.report_every > 0 and time.monotonic() - last_report >= self.report_every:
+                last_report = time.monotonic()
+                self.report(started, got[1])
             time.sleep(1.0)
 
 
 def run_session(composuite: str, task: str, policy: str, episodes: int, record: bool,
-                out: Path) -> dict:
+                out: Path, report_every: float = 0.0) -> dict:
     args = [composuite, "session", "--tasks", task, "--episodes", str(episodes), "--policy", policy,
             "--horizon", str(HORIZON), "--seed", "0", "--out", str(out)]
     if not record:
         args.append("--no-record")
     start = time.monotonic()
     session = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    watch = RecorderWatch(session, out / "bag") if record else None
+    watch = RecorderWatch(session, out / "bag", report_every) if record else None
     if watch:
         watch.start()
     stdout, stderr = session.communicate()
@@ -109,6 +125,8 @@ def main() -> None:
     parser.add_argument("--policy", default="zero", help="expert, random or zero (the cheapest agent)")
     parser.add_argument("--record-only", action="store_true",
                         help="only the recorded runs (for the recorder's RSS over a long session)")
+    parser.add_argument("--rss-every", type=float, default=0.0, metavar="SECONDS",
+                        help="also print the recorder's and the sim's RSS and the bag's size this often")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     episodes = max(1, args.steps // HORIZON)
@@ -117,7 +135,8 @@ def main() -> None:
         for round_ in range(args.rounds):
             for record in (True,) if args.record_only else (False, True):
                 out = Path(tmp) / f"{round_}_{int(record)}"
-                result = run_session(args.composuite, args.task, args.policy, episodes, record, out)
+                result = run_session(args.composuite, args.task, args.policy, episodes, record, out,
+                                     args.rss_every)
                 results.append(result)
                 print(f"round {round_ + 1}, {'recording' if record else 'not recording'}: "
                       f"{result['steps_per_s']:.0f} steps/s", file=sys.stderr, flush=True)

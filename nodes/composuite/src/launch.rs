@@ -22,6 +22,11 @@ const GRACE: Duration = Duration::from_secs(5);
 /// are stopped, so reliable DDS can resend whatever the recorder missed (RustDDS heartbeats a
 /// lagging reader every 100 ms); a node that exits takes its unacknowledged samples with it.
 const RECORDER_SETTLE: Duration = Duration::from_secs(1);
+/// The recorder runs this much nicer than the environments: it is never on the lockstep
+/// chain (sim → reward → agent → sim), so on a machine with few cores it should take the CPU
+/// only when the chain leaves it idle and catch up then — reliable DDS keeps what it has not
+/// acknowledged until it does.
+const RECORDER_NICENESS: libc::c_int = 10;
 
 /// Start the node suite headless: N environments × (task_manager, sim, reward).
 ///
@@ -338,11 +343,24 @@ impl Suite {
     }
 
     fn spawn(&self, kind: NodeKind, arguments: &[String]) -> std::io::Result<Child> {
-        Command::new(&self.exe)
-            .arg("node")
-            .arg(kind.name())
-            .args(arguments)
-            .spawn()
+        let mut command = Command::new(&self.exe);
+        command.arg("node").arg(kind.name()).args(arguments);
+        if kind == NodeKind::Recorder {
+            use std::os::unix::process::CommandExt;
+            // SAFETY: the closure runs in the forked child before exec and only makes the
+            // setpriority system call, which is async-signal-safe. Set before the node starts
+            // any thread, the niceness holds for all of them.
+            unsafe {
+                command.pre_exec(|| {
+                    let now = libc::getpriority(libc::PRIO_PROCESS, 0);
+                    if libc::setpriority(libc::PRIO_PROCESS, 0, now + RECORDER_NICENESS) != 0 {
+                        return Err(std::io::Error::last_os_error());
+                    }
+                    Ok(())
+                });
+            }
+        }
+        command.spawn()
     }
 
     /// The first node that exited on its own, described.
