@@ -10,7 +10,7 @@
 //! friction does — MuJoCo's torsional friction, except that the cap is taken on its own rather
 //! than inside one elliptic cone with the sliding friction.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use rapier3d::dynamics::{
     GenericJoint, GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, MotorModel,
@@ -88,13 +88,24 @@ impl TorsionalFriction {
                 if coefficient <= 0.0 || normal_impulse <= 0.0 {
                     continue;
                 }
-                let cap = coefficient as Real * normal_impulse.abs() / dt;
+                let cap = coefficient as Real * normal_impulse / dt;
                 let key = (other.into_raw_parts(), own, theirs);
                 touching.push((key, other_body, manifold.data.normal, cap));
             }
         }
-        for joint in self.joints.values() {
-            if let Some(joint) = physics.impulse_joints.get_mut(*joint, false) {
+        // Out of contact: no cap. Only joints that still hold one are touched (each mutable
+        // access queues the joint for rapier's bookkeeping, every 2 ms step).
+        let touched: BTreeSet<ContactKey> = touching.iter().map(|t| t.0).collect();
+        for (key, &handle) in &self.joints {
+            let capped = physics
+                .impulse_joints
+                .get(handle)
+                .and_then(|joint| joint.data.motor(JointAxis::AngZ))
+                .is_some_and(|motor| motor.max_force != 0.0);
+            if capped
+                && !touched.contains(key)
+                && let Some(joint) = physics.impulse_joints.get_mut(handle, false)
+            {
                 joint.data.set_motor_max_force(JointAxis::AngZ, 0.0);
             }
         }
