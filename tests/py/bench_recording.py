@@ -82,11 +82,13 @@ class RecorderWatch(threading.Thread):
 
 
 def run_session(composuite: str, task: str, policy: str, episodes: int, record: bool,
-                out: Path, report_every: float = 0.0) -> dict:
+                out: Path, report_every: float = 0.0, max_bag_size: int = 0) -> dict:
     args = [composuite, "session", "--tasks", task, "--episodes", str(episodes), "--policy", policy,
             "--horizon", str(HORIZON), "--seed", "0", "--out", str(out)]
     if not record:
         args.append("--no-record")
+    elif max_bag_size:
+        args += ["--max-bag-size", str(max_bag_size)]
     start = time.monotonic()
     session = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     watch = RecorderWatch(session, out / "bag", report_every) if record else None
@@ -127,6 +129,8 @@ def main() -> None:
                         help="only the recorded runs (for the recorder's RSS over a long session)")
     parser.add_argument("--rss-every", type=float, default=0.0, metavar="SECONDS",
                         help="also print the recorder's and the sim's RSS and the bag's size this often")
+    parser.add_argument("--max-bag-size", type=int, default=0, metavar="BYTES",
+                        help="split the recorded bags into files of this size (session --max-bag-size)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     episodes = max(1, args.steps // HORIZON)
@@ -136,7 +140,7 @@ def main() -> None:
             for record in (True,) if args.record_only else (False, True):
                 out = Path(tmp) / f"{round_}_{int(record)}"
                 result = run_session(args.composuite, args.task, args.policy, episodes, record, out,
-                                     args.rss_every)
+                                     args.rss_every, args.max_bag_size)
                 results.append(result)
                 print(f"round {round_ + 1}, {'recording' if record else 'not recording'}: "
                       f"{result['steps_per_s']:.0f} steps/s", file=sys.stderr, flush=True)

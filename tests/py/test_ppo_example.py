@@ -259,3 +259,27 @@ def test_same_seed_same_numbers(pendulum_run, tmp_path):
 
     assert numbers(rows_a) == numbers(rows_b)
     assert numbers(rows_a) != numbers(rows_other)  # the comparison is not vacuous
+
+
+PLOT_SCRIPT = SCRIPT.with_name("plot_learning_curve.py")
+
+
+def test_the_learning_curve_plot_draws_a_log_and_names_a_bad_one(pendulum_run, tmp_path):
+    _, rows, save = pendulum_run
+    log = save.with_suffix(".csv")
+    png = tmp_path / "curve.png"
+    done = subprocess.run([sys.executable, str(PLOT_SCRIPT), str(log), "--out", str(png),
+                           "--return-line", "-500", "a baseline"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    data = png.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")) == (800, 600)
+    # A log with no finished episode, and a CSV that is not a log, are refused by name.
+    empty = tmp_path / "empty.csv"
+    empty.write_text(",".join(ppo.CSV_COLUMNS) + "\n1,400" + "," * (len(ppo.CSV_COLUMNS) - 2) + "\n")
+    other = tmp_path / "other.csv"
+    other.write_text("a,b\n1,2\n")
+    for path, says in ((empty, "no epoch with a finished episode"), (other, "not a ppo_train.py log")):
+        done = subprocess.run([sys.executable, str(PLOT_SCRIPT), str(path), "--out", str(tmp_path / "x.png")],
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode != 0 and says in done.stderr and str(path) in done.stderr, done.stderr

@@ -278,6 +278,8 @@ def test_bad_record_targets_are_named_and_the_suite_keeps_serving(tmp_path):
     assert result.returncode == 2 and "exists already" in result.stderr
     result = composuite("launch", "--record-regex", "(", "--record", str(tmp_path / "x"), check=False)
     assert result.returncode == 2 and "--record-regex" in result.stderr
+    result = composuite("launch", "--record-max-bag-duration", "0", "--record", str(tmp_path / "x"), check=False)
+    assert result.returncode == 2 and "--record-max-bag-duration 0 is invalid; seconds > 0" in result.stderr
     result = composuite("node", "recorder", "--ros-args", "-p", "all:=true", check=False)
     assert result.returncode != 0 and "-p output:=DIR" in result.stderr
     result = composuite("node", "recorder", "--ros-args", "-p", f"output:={tmp_path / 'y'}", check=False)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import msgcheck
 import node_suite
-from test_recorder import bag_messages, composuite
+from test_recorder import bag_messages, composuite, metadata
 
 TASKS = ["IIWA/box/no_obstacle/pick_place", "Gen3/plate/object_wall/push"]
 
@@ -123,6 +123,43 @@ def copy_with_one_command_changed(bag: Path, dest: Path, index: int) -> None:
             writer.finish()
 
 
+def test_a_session_split_into_several_files_is_one_bag_to_every_reader(tmp_path):
+    """--max-bag-size: the recorder starts a new MCAP file once one holds that many bytes (after
+    a whole chunk, as rosbag2 does); metadata.yaml lists every file, each file is a complete MCAP
+    on its own, and the bag tools and rosbags read the files as one bag."""
+    from mcap.reader import make_reader
+
+    out = tmp_path / "split"
+    result = session("--episodes", "3", "--policy", "random", "--horizon", "200", "--seed", "2",
+                     "--max-bag-size", "50000", "--out", str(out))
+    assert result.returncode == 0, result.stderr[-4000:]
+    bag = out / "bag"
+    info = metadata(bag)
+    files = info["relative_file_paths"]
+    assert len(files) >= 2, files
+    assert files == [f"bag_{i}.mcap" for i in range(len(files))]
+    assert sorted(p.name for p in bag.glob("*.mcap")) == sorted(files)
+    assert [f["path"] for f in info["files"]] == files
+    per_topic: dict[str, int] = {}
+    for name, listed in zip(files, info["files"]):
+        with open(bag / name, "rb") as f:
+            reader = make_reader(f, validate_crcs=True)
+            summary = reader.get_summary()
+            assert summary.statistics.message_count == listed["message_count"], name
+            for _, channel, _ in reader.iter_messages():
+                per_topic[channel.topic] = per_topic.get(channel.topic, 0) + 1
+    assert sum(per_topic.values()) == info["message_count"]
+    assert per_topic == {t["topic_metadata"]["name"]: t["message_count"]
+                         for t in info["topics_with_message_count"] if t["message_count"]}
+    recorded = bag_messages(bag)
+    (commands,) = [t for t in recorded if t.endswith("/joint_command")]
+    assert len(recorded[commands]) == 3 * 200, "no command lost at a file boundary"
+    composuite("bag", "episodes", str(bag), "--csv", str(tmp_path / "from_bag.csv"))
+    assert (tmp_path / "from_bag.csv").read_text() == (out / "episodes.csv").read_text()
+    replay = composuite("bag", "replay", str(bag), "--verify")
+    assert replay.stdout.count("201 observations and rewards bit-identical") == 3, replay.stdout
+
+
 def test_the_expert_session_succeeds(tmp_path):
     result = session("--episodes", "1", "--horizon", "200", "--out", str(tmp_path / "e"), "--json")
     assert result.returncode == 0, result.stderr[-4000:]
@@ -138,3 +175,9 @@ def test_bad_session_arguments_are_named(tmp_path):
     (tmp_path / "z").mkdir()
     result = session("--out", str(tmp_path / "z"))
     assert result.returncode == 2 and "exists already" in result.stderr
+    result = session("--max-bag-duration=-1", "--out", str(tmp_path / "d"))
+    assert result.returncode == 2 and "--max-bag-duration -1 is invalid; seconds > 0" in result.stderr
+    result = session("--max-bag-size", "0", "--out", str(tmp_path / "s"))
+    assert result.returncode == 2 and "--max-bag-size 0 is invalid" in result.stderr
+    result = session("--max-bag-size", "1000", "--no-record", "--out", str(tmp_path / "n"))
+    assert result.returncode == 2 and "cannot be used with" in result.stderr

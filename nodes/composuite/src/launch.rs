@@ -104,7 +104,10 @@ pub struct LaunchArgs {
     record_exclude: Option<String>,
     /// With --record: start a new bag file every this many bytes (like --max-bag-size).
     #[arg(long, value_name = "BYTES", requires = "record")]
-    record_max_bag_size: Option<u64>,
+    pub(crate) record_max_bag_size: Option<u64>,
+    /// With --record: start a new bag file every this many seconds (like --max-bag-duration).
+    #[arg(long, value_name = "SECONDS", requires = "record")]
+    pub(crate) record_max_bag_duration: Option<f64>,
 }
 
 struct Running {
@@ -191,6 +194,18 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
             dir.display()
         ));
     }
+    if args.record_max_bag_size == Some(0) {
+        return Err(
+            "--record-max-bag-size 0 is invalid; bytes > 0 (leave it out for one file)".into(),
+        );
+    }
+    if let Some(s) = args.record_max_bag_duration
+        && !(s.is_finite() && s > 0.0)
+    {
+        return Err(format!(
+            "--record-max-bag-duration {s} is invalid; seconds > 0 (leave it out for one file)"
+        ));
+    }
     for (flag, regex) in [
         ("--record-regex", &args.record_regex),
         ("--record-exclude", &args.record_exclude),
@@ -265,6 +280,9 @@ fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usi
             }
             if let Some(size) = args.record_max_bag_size {
                 param("max_bag_size", size.to_string());
+            }
+            if let Some(seconds) = args.record_max_bag_duration {
+                param("max_bag_duration", format!("{seconds:?}"));
             }
         }
     }
@@ -444,6 +462,7 @@ impl LaunchArgs {
             record_regex: None,
             record_exclude: None,
             record_max_bag_size: None,
+            record_max_bag_duration: None,
         }
     }
 }

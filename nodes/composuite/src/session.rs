@@ -56,6 +56,13 @@ pub struct SessionArgs {
     /// difference; `scripts/bench-recording` measures it).
     #[arg(long)]
     no_record: bool,
+    /// Start a new bag file every this many bytes, as `ros2 bag record --max-bag-size` (the
+    /// recorder's memory then restarts with each file: an MCAP file's index grows with it).
+    #[arg(long, value_name = "BYTES", conflicts_with = "no_record")]
+    max_bag_size: Option<u64>,
+    /// Start a new bag file every this many seconds, as `ros2 bag record --max-bag-duration`.
+    #[arg(long, value_name = "SECONDS", conflicts_with = "no_record")]
+    max_bag_duration: Option<f64>,
 }
 
 /// Run the session.
@@ -71,6 +78,16 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     let policy = PolicyKind::parse(&args.policy).map_err(|e| format!("--policy: {e}"))?;
     if args.episodes == 0 {
         return Err("--episodes must be at least 1".into());
+    }
+    if args.max_bag_size == Some(0) {
+        return Err("--max-bag-size 0 is invalid; bytes > 0 (leave it out for one file)".into());
+    }
+    if let Some(s) = args.max_bag_duration
+        && !(s.is_finite() && s > 0.0)
+    {
+        return Err(format!(
+            "--max-bag-duration {s} is invalid; seconds > 0 (leave it out for one file)"
+        ));
     }
     let out = args.out.clone().unwrap_or_else(|| {
         let now = SystemTime::now()
@@ -90,6 +107,8 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     let namespace = format!("/session_{}", std::process::id());
     let mut launch = LaunchArgs::one_environment(&args.tasks[0], &namespace, "warn");
     launch.record = (!args.no_record).then(|| bag.clone());
+    launch.record_max_bag_size = args.max_bag_size;
+    launch.record_max_bag_duration = args.max_bag_duration;
     launch.horizon = args.horizon;
     let total = tasks.len() as u64 * u64::from(args.episodes);
     eprintln!(
