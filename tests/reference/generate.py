@@ -7,7 +7,7 @@ against. It is not part of the port and never runs in CI: it needs a Python 3.11
 the reference stack installed and a CompoSuite checkout on PYTHONPATH. `scripts/reference-data`
 sets both up; see tests/reference/README.md for the file formats.
 
-Four independent parts (select one with --only):
+Five independent parts (select one with --only):
 
   step0         every one of the 256 tasks x seeds 0..4: the observation right after reset and
                 the raw state behind it (joint angles, object pose, grip site, hand frame).
@@ -17,6 +17,10 @@ Four independent parts (select one with --only):
                 the success flags and the length.
   spin          each object resting on bin 1's floor, turned by a torque about the vertical for
                 1 s: its yaw per control step (how much the contacts' torsional friction resists).
+  grasp         the port's scripted plans (data/grasp_plans.json.gz: joint targets and gripper
+                actions of 12 tasks x 2 seeds) played through the reference's controller with a
+                closed-loop law: object and grip site, grasp flag and reward per plan step, and
+                the first successful step (grasp, carry, push and release in MuJoCo's contacts).
 
 All numbers are rounded to 7 decimals. Integral values are written without a decimal point.
 """
@@ -389,6 +393,77 @@ def run_spin(args, composuite):
     write_json(os.path.join(args.out, "spin.json"), {"meta": meta, "records": records})
 
 
+def grasp_action(targets, gripper, obs):
+    """The plan's closed-loop law (the port's tests/reference/mod.rs `tracking_action`): each
+    joint's wrapped error to its target over the controller's 0.05 rad per unit, clipped."""
+    action = np.zeros(8)
+    for j in range(7):
+        q = math.atan2(obs[68 + j], obs[61 + j])
+        error = (targets[j] - q + math.pi) % (2.0 * math.pi) - math.pi
+        action[j] = min(1.0, max(-1.0, error / 0.05))
+    action[7] = gripper
+    return action
+
+
+def run_grasp(args, composuite):
+    with gzip.open(args.grasp_plans, "rt") as f:
+        plans = json.load(f)
+    hold = plans["meta"]["hold"]
+    # The port writes Trashcan as trash_can (it reads both spellings).
+    by_name = {port_name(*t).replace("trashcan", "trash_can"): t for t in all_tasks()}
+    patterns = [p.lower() for p in args.tasks.split(",")] if args.tasks else []
+    t_start = time.time()
+    episodes = []
+    for plan in plans["episodes"]:
+        if patterns and not any(p in plan["name"].lower() for p in patterns):
+            continue
+        robot, obj, obstacle, objective = by_name[plan["name"]]
+        ref = Reference(composuite, robot, obj, obstacle, objective)
+        obs = ref.reset(plan["seed"])
+        cols = {k: [] for k in ["object_pos", "grip_site_pos", "grasp", "reward"]}
+        first_success, step, stopped = None, 0, False
+        for targets, gripper in zip(plan["targets"], plan["gripper"]):
+            for _ in range(hold):
+                obs, reward, done, _info = ref.gym.step(grasp_action(targets, gripper, obs))
+                step += 1
+                if first_success is None and ref.success():
+                    first_success = step
+                if step % hold == 0:
+                    cols["object_pos"].append(r7(obs[0:3]))
+                    cols["grip_site_pos"].append(r7(obs[82:85]))
+                    cols["grasp"].append(ref.grasp())
+                    cols["reward"].append(r7(reward))
+                if done:  # Push's lift rule: the reference refuses the next step
+                    stopped = True
+                    break
+            if stopped:
+                break
+        ref.close()
+        rec = task_record(robot, obj, obstacle, objective)
+        rec.update({"seed": plan["seed"], "steps": step, "first_success_step": first_success, **cols})
+        episodes.append(rec)
+        log(f"grasp: {len(episodes)}/{len(plans['episodes'])} {rec['name']} seed {plan['seed']}: "
+            f"{step} steps, first success at {first_success}, grasped in "
+            f"{sum(cols['grasp'])}/{len(cols['grasp'])} samples ({time.time() - t_start:.0f}s)")
+    meta = base_meta(args, composuite, "grasp")
+    meta.update({
+        "plans": "tests/reference/data/grasp_plans.json.gz (sha256 "
+                 + hashlib.sha256(open(args.grasp_plans, "rb").read()).hexdigest() + ")",
+        "hold": hold,
+        "law": plans["meta"]["law"],
+        "fields": {
+            "object_pos": "obs object position after the last control step of each plan step",
+            "grip_site_pos": "obs eef_pos at the same samples",
+            "grasp": "env._check_grasp(...) at the same samples",
+            "reward": "reward returned by that step",
+            "first_success_step": "1-based control step whose env._check_success() first held (null: never)",
+            "steps": "control steps played (fewer than len(targets) * hold if Push's lift rule ended it)",
+        },
+        "elapsed_seconds": round(time.time() - t_start, 1),
+    })
+    write_json_gz(os.path.join(args.out, "grasp.json.gz"), {"meta": meta, "episodes": episodes})
+
+
 def base_meta(args, composuite, part):
     import gym
     import mujoco
@@ -703,14 +778,15 @@ def main():
             "they run: trajectories (16 tasks x 2 seeds x 100 fixed steps, ~2 min), step0 (256 tasks x "
             "5 seeds, reset observations, ~40 min: every make/reset recompiles the model), random "
             "(16 tasks x N random-action episodes of 500 steps, ~2 min per episode per 16 tasks), spin "
-            "(4 objects x 11 torques, ~2 min)."),
-        epilog="Outputs: OUT/trajectories.json.gz, OUT/step0.json.gz, OUT/random_returns.json, OUT/spin.json. "
+            "(4 objects x 11 torques, ~2 min), grasp (24 scripted episodes of 2,000 steps, ~15 min)."),
+        epilog="Outputs: OUT/trajectories.json.gz, OUT/step0.json.gz, OUT/random_returns.json, OUT/spin.json, "
+               "OUT/grasp.json.gz. "
                "See tests/reference/README.md for the formats.",
     )
     parser.add_argument("--out", default=os.path.join(here, "data"),
                         help="output folder (default: the data/ folder next to this script)")
-    parser.add_argument("--only", choices=["step0", "trajectories", "random", "spin"],
-                        help="run only this part (default: all four)")
+    parser.add_argument("--only", choices=["step0", "trajectories", "random", "spin", "grasp"],
+                        help="run only this part (default: all five)")
     parser.add_argument("--tasks", default=None,
                         help="comma-separated case-insensitive substrings; keep only tasks whose port name "
                              "(e.g. Gen3/hollow_box/goal_wall/shelf) or reference name "
@@ -721,6 +797,9 @@ def main():
     parser.add_argument("--resume", action="store_true",
                         help="step0 / random: continue from OUT/.step0.partial.jsonl or "
                              "OUT/.random.partial.jsonl left by an interrupted run")
+    parser.add_argument("--grasp-plans", default=os.path.join(here, "data", "grasp_plans.json.gz"),
+                        help="grasp part: the plans to play (default: %(default)s, written by the port's "
+                             "`cargo run --release -p composuite_core --example reference_grasp -- --write-plans`)")
     parser.add_argument("--composuite-commit", default=DEFAULT_COMPOSUITE_COMMIT,
                         help="CompoSuite commit recorded in the meta (default: %(default)s)")
     args = parser.parse_args()
@@ -730,12 +809,12 @@ def main():
     import composuite
 
     os.makedirs(args.out, exist_ok=True)
-    parts = [args.only] if args.only else ["trajectories", "step0", "random", "spin"]
+    parts = [args.only] if args.only else ["trajectories", "step0", "random", "spin", "grasp"]
     for part in parts:
         t0 = time.time()
         log(f"part {part}: start")
         {"step0": run_step0, "trajectories": run_trajectories, "random": run_random,
-         "spin": run_spin}[part](args, composuite)
+         "spin": run_spin, "grasp": run_grasp}[part](args, composuite)
         log(f"part {part}: done in {time.time() - t0:.0f}s")
 
 

@@ -228,3 +228,76 @@ fn objects_resist_spinning_on_the_floor_as_the_references_do() {
         }
     }
 }
+
+/// Contact-rich episodes: the port's scripted plans for 12 tasks × 2 seeds (every element at
+/// least twice: grasps from the top and the side, carries, pushes, placing in a bin, a shelf and
+/// a trash can) played in both engines through the reference's controller, each closing the loop
+/// on its own observation. Measured: 23 of 24 episodes end alike (21 succeed in both, 2 fail in
+/// both; the odd one is a dumbbell released over the trash can that stays lodged on the can's
+/// rim in the reference and falls in here), first successes within 47 control steps of the
+/// reference's (20 of 21 within 9), the grasp flag equal at 98.9 % of the samples, the object's
+/// median distance from the reference's at most 39 mm in an episode that ends alike.
+#[test]
+fn scripted_grasps_succeed_in_both_engines_alike() {
+    let plans = reference::grasp_plans();
+    let runs = reference::grasp_runs();
+    assert_eq!(plans.len(), 24, "12 tasks × 2 seeds");
+    assert_eq!(runs.len(), plans.len());
+    let (mut flags, mut flags_equal, mut both_succeed) = (0, 0, 0);
+    let mut differently = Vec::new();
+    for (plan, (task, seed, theirs)) in plans.iter().zip(&runs) {
+        assert_eq!(
+            (plan.task, plan.seed),
+            (*task, *seed),
+            "plans and runs in one order"
+        );
+        let ours = plan.ours();
+        let episode = format!("{task} seed {seed}");
+        let (n, equal) = ours.grasp_flags_equal(theirs);
+        flags += n;
+        flags_equal += equal;
+        if ours.first_success.is_some() != theirs.first_success.is_some() {
+            differently.push(format!(
+                "{episode}: success at step {:?} here, {:?} in the reference",
+                ours.first_success, theirs.first_success
+            ));
+            continue;
+        }
+        if let (Some(o), Some(t)) = (ours.first_success, theirs.first_success) {
+            both_succeed += 1;
+            assert!(
+                o.abs_diff(t) <= GRASP_SUCCESS_STEPS,
+                "{episode}: first success at step {o} here, {t} in the reference"
+            );
+        }
+        let gaps = ours.sorted_object_gaps(theirs);
+        let median = gaps[gaps.len() / 2];
+        assert!(
+            median <= GRASP_OBJECT_MEDIAN_M,
+            "{episode}: the object {:.1} mm from the reference's (median over the episode)",
+            1e3 * median
+        );
+    }
+    assert!(
+        differently.len() <= GRASP_EPISODES_ENDING_DIFFERENTLY,
+        "episodes that end differently:\n{}",
+        differently.join("\n")
+    );
+    let agreement = flags_equal as f64 / flags as f64;
+    assert!(
+        agreement >= GRASP_FLAG_AGREEMENT,
+        "grasp flags equal at {:.1} % of the samples",
+        100.0 * agreement
+    );
+    assert!(
+        both_succeed >= 18,
+        "the comparison covers successes: {both_succeed}"
+    );
+}
+
+/// Bounds of [`scripted_grasps_succeed_in_both_engines_alike`] (measured: see its comment and
+/// `docs/differences-from-reference.md`).
+const GRASP_EPISODES_ENDING_DIFFERENTLY: usize = 2;
+const GRASP_SUCCESS_STEPS: usize = 60;
+const GRASP_FLAG_AGREEMENT: f64 = 0.97;
+const GRASP_OBJECT_MEDIAN_M: f64 = 0.05;

@@ -434,3 +434,155 @@ pub fn spins() -> Vec<Spin> {
         })
         .collect()
 }
+
+/// A scripted, contact-rich episode played in both engines (`grasp_plans.json.gz`, the port's
+/// scripted expert's joint targets and gripper commands for one task and seed; `grasp.json.gz`,
+/// the reference's run of it). Both sides turn the plan into the reference's own actions with
+/// the same closed-loop law ([`tracking_action`]), each from its own observation, so the arms
+/// follow the same path while grasp, carry and release play out in each engine's contacts.
+pub struct GraspPlan {
+    pub task: TaskSpec,
+    pub seed: u64,
+    /// Joint targets (rad) per plan step, each held for `hold` control steps.
+    pub targets: Vec<[f64; 7]>,
+    /// The gripper action per plan step: +1 close, −1 open.
+    pub gripper: Vec<f64>,
+    pub hold: usize,
+}
+
+/// The reference action that moves each joint towards its target: the wrapped difference over
+/// the controller's 0.05 rad per unit of action, clipped to [−1, 1] (so the goal q + 0.05·a is
+/// the target itself once within 0.05 rad), and the plan's gripper action.
+pub fn tracking_action(targets: &[f64; 7], gripper: f64, observation: &[f64]) -> [f64; 8] {
+    let pi = std::f64::consts::PI;
+    let q = joint_angles(observation);
+    let mut action = [0.0; 8];
+    for j in 0..7 {
+        let error = (targets[j] - q[j] + pi).rem_euclid(2.0 * pi) - pi;
+        action[j] = (error / 0.05).clamp(-1.0, 1.0);
+    }
+    action[7] = gripper;
+    action
+}
+
+/// One engine's run of a [`GraspPlan`], sampled after the last control step of each plan step.
+#[derive(Debug, Clone, Default)]
+pub struct GraspRun {
+    pub object_position: Vec<[f64; 3]>,
+    pub grip_site_position: Vec<[f64; 3]>,
+    pub grasp: Vec<bool>,
+    pub reward: Vec<f64>,
+    /// The first control step (1-based) whose success test held, if any.
+    pub first_success: Option<usize>,
+}
+
+impl GraspRun {
+    /// The share of samples with the grasp flag set.
+    pub fn grasp_share(&self) -> f64 {
+        self.grasp.iter().filter(|g| **g).count() as f64 / self.grasp.len().max(1) as f64
+    }
+
+    /// Samples both runs have, and at how many of them the grasp flags are equal.
+    pub fn grasp_flags_equal(&self, other: &GraspRun) -> (usize, usize) {
+        let n = self.grasp.len().min(other.grasp.len());
+        let equal = (0..n).filter(|&i| self.grasp[i] == other.grasp[i]).count();
+        (n, equal)
+    }
+
+    /// The distance (m) between the two runs' objects at each sample both have, sorted.
+    pub fn sorted_object_gaps(&self, other: &GraspRun) -> Vec<f64> {
+        let mut gaps: Vec<f64> = self
+            .object_position
+            .iter()
+            .zip(&other.object_position)
+            .map(|(a, b)| (point(a) - point(b)).norm())
+            .collect();
+        gaps.sort_by(f64::total_cmp);
+        gaps
+    }
+}
+
+impl GraspPlan {
+    /// The port's run of the plan, recorded as the reference's was.
+    pub fn ours(&self) -> GraspRun {
+        let horizon = (self.targets.len() * self.hold) as u32;
+        let mut env = Env::new(self.task, EnvConfig::default().horizon(horizon));
+        let mut observation = env.reset(self.seed).expect("reset").flat();
+        let mut run = GraspRun::default();
+        let mut step = 0;
+        'plan: for (targets, gripper) in self.targets.iter().zip(&self.gripper) {
+            for _ in 0..self.hold {
+                let action = tracking_action(targets, *gripper, &observation);
+                let Ok(result) = env.step(&Action::Reference(action)) else {
+                    break 'plan; // Push's lift rule ended the episode, as in the reference
+                };
+                step += 1;
+                observation = result.observation.flat();
+                if result.info.success && run.first_success.is_none() {
+                    run.first_success = Some(step);
+                }
+                if step % self.hold == 0 {
+                    let state = env.world_state();
+                    let p = |v: &[f64]| [v[0], v[1], v[2]];
+                    run.object_position
+                        .push(p(&observation[layout::OBJECT_POSITION]));
+                    run.grip_site_position
+                        .push(p(&observation[layout::EEF_POSITION]));
+                    run.grasp.push(state.grasping);
+                    run.reward.push(result.reward);
+                }
+                if result.terminated {
+                    break 'plan;
+                }
+            }
+        }
+        run
+    }
+}
+
+/// The committed plans.
+pub fn grasp_plans() -> Vec<GraspPlan> {
+    let data = load("grasp_plans.json.gz");
+    let hold = data["meta"]["hold"].as_u64().expect("hold") as usize;
+    data["episodes"]
+        .as_array()
+        .expect("episodes")
+        .iter()
+        .map(|e| GraspPlan {
+            task: task(e),
+            seed: e["seed"].as_u64().expect("seed"),
+            targets: rows(&e["targets"])
+                .into_iter()
+                .map(|t| t.try_into().expect("7 joint targets"))
+                .collect(),
+            gripper: floats(&e["gripper"]),
+            hold,
+        })
+        .collect()
+}
+
+/// The reference's runs of the committed plans, in the plans' order.
+pub fn grasp_runs() -> Vec<(TaskSpec, u64, GraspRun)> {
+    let data = load("grasp.json.gz");
+    let triples = |v: &Value| -> Vec<[f64; 3]> {
+        rows(v)
+            .into_iter()
+            .map(|p| p.try_into().expect("3 values"))
+            .collect()
+    };
+    data["episodes"]
+        .as_array()
+        .expect("episodes")
+        .iter()
+        .map(|e| {
+            let run = GraspRun {
+                object_position: triples(&e["object_pos"]),
+                grip_site_position: triples(&e["grip_site_pos"]),
+                grasp: bools(&e["grasp"]),
+                reward: floats(&e["reward"]),
+                first_success: e["first_success_step"].as_u64().map(|s| s as usize),
+            };
+            (task(e), e["seed"].as_u64().expect("seed"), run)
+        })
+        .collect()
+}
