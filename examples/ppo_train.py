@@ -1,8 +1,11 @@
 """PPO in pure numpy for Gymnasium vector environments: the CompoSuite paper's reference learner.
 
 The algorithm follows OpenAI Spinning Up's PPO-clip as the CompoSuite paper used it (Mendez et
-al., 2022): a Gaussian policy whose mean is a 2 x 64 tanh MLP and whose log-std is a learned,
-state-independent vector; a separate 2 x 64 tanh MLP critic; GAE(lambda) advantages normalised
+al., 2022; its learner is in the authors' fork of Spinning Up, `ppo/core.py`): a Gaussian policy
+whose mean is a 2 x 64 tanh MLP with a tanh output layer and whose log-std is a fixed,
+state-independent vector (0 on the seven joint dimensions, -0.5 on the gripper's, the last; not
+trained — `--learn-log-std` trains it as Spinning Up's original does); a separate 2 x 64 tanh MLP
+critic; GAE(lambda) advantages normalised
 over the batch; discounted rewards-to-go as value targets; full-batch Adam steps (128 on the
 clipped surrogate, stopped early once the approximate KL exceeds 1.5 x target_kl, then 128 on the
 value MSE). Everything, including the backprop and Adam, is written out in numpy so that the
@@ -27,8 +30,9 @@ Usage
 Every epoch prints one line and, with --log FILE.csv, appends one CSV row (see CSV_COLUMNS):
 mean return, length and success rate are over the episodes that finished during the epoch (empty
 if none did). --save PATH.npz stores the final parameters: `pi/W0, pi/b0, ...` (policy mean MLP,
-layer k maps `h @ Wk + bk`, tanh between layers), `log_std`, `v/W0, v/b0, ...` (critic). To act
-with a saved policy: `mean = mlp(obs)`, then clip to the action bounds.
+layer k maps `h @ Wk + bk`, tanh after every layer, the last included), `log_std`, `v/W0, v/b0,
+...` (critic; its last layer linear). To act with a saved policy: `mean = tanh(mlp(obs))`, then
+clip to the action bounds.
 
 Vector-env semantics (Gymnasium 1.x, autoreset mode NEXT_STEP): when env i ends an episode at step
 t, the observation it returns is that episode's last one; at step t + 1 it ignores the action,
@@ -101,31 +105,36 @@ def _tanh(z: np.ndarray) -> np.ndarray:
     return z
 
 
-def mlp_forward(params: list[np.ndarray], x: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Output and the layer inputs (the cache backprop needs). tanh after every layer but the
-    last, which is linear."""
+def mlp_forward(params: list[np.ndarray], x: np.ndarray,
+                tanh_output: bool = False) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Output and the cache backprop needs: the layer inputs, then (with `tanh_output`) the
+    output itself. tanh after every hidden layer; the last layer is linear unless
+    `tanh_output` (the paper's policy mean: MLP with a tanh output layer)."""
     layer_inputs = [x]
     h = x
     n_layers = len(params) // 2
     for k in range(n_layers):
         h = h @ params[2 * k] + params[2 * k + 1]
-        if k < n_layers - 1:
+        if k < n_layers - 1 or tanh_output:
             h = _tanh(h)
             layer_inputs.append(h)
     return h, layer_inputs
 
 
-def mlp_backward(params: list[np.ndarray], layer_inputs: list[np.ndarray],
-                 d_out: np.ndarray) -> list[np.ndarray]:
-    """Gradients of a scalar loss w.r.t. [W0, b0, ...] given d loss / d output."""
+def mlp_backward(params: list[np.ndarray], cache: list[np.ndarray], d_out: np.ndarray,
+                 tanh_output: bool = False) -> list[np.ndarray]:
+    """Gradients of a scalar loss w.r.t. [W0, b0, ...] given d loss / d output; `cache` and
+    `tanh_output` as mlp_forward gave and took them."""
+    n_layers = len(params) // 2
     grads: list[np.ndarray] = [np.empty(0)] * len(params)
-    d_pre = d_out  # gradient w.r.t. the current layer's pre-activation
-    for k in reversed(range(len(params) // 2)):
-        h_in = layer_inputs[k]
+    # gradient w.r.t. the current layer's pre-activation; tanh' = 1 - tanh^2
+    d_pre = d_out - d_out * cache[n_layers] * cache[n_layers] if tanh_output else d_out
+    for k in reversed(range(n_layers)):
+        h_in = cache[k]
         grads[2 * k] = h_in.T @ d_pre
         grads[2 * k + 1] = d_pre.sum(axis=0)
         if k > 0:
-            # h_in = tanh(z) for k > 0, and tanh' = 1 - tanh^2
+            # h_in = tanh(z) for k > 0
             d_h = d_pre @ params[2 * k].T
             d_pre = d_h - d_h * h_in * h_in
     return grads
@@ -154,7 +163,7 @@ def policy_loss_and_grads(pi_params: list[np.ndarray], obs: np.ndarray, act: np.
     gradient w.r.t. pi_params = [mean-MLP params..., log_std]."""
     mlp_params, log_std = pi_params[:-1], pi_params[-1]
     batch = obs.shape[0]
-    mean, cache = mlp_forward(mlp_params, obs)
+    mean, cache = mlp_forward(mlp_params, obs, tanh_output=True)
     std = np.exp(log_std)
     z = (act - mean) / std
     logp = -0.5 * np.sum(z * z, axis=1) - np.sum(log_std) - 0.5 * act.shape[1] * LOG_2PI
@@ -171,7 +180,7 @@ def policy_loss_and_grads(pi_params: list[np.ndarray], obs: np.ndarray, act: np.
     d_logp = d_ratio * ratio
     d_mean = d_logp[:, None] * z / std                    # d logp / d mean = z / std
     d_log_std = d_logp @ (z * z - 1.0) - ent_coef         # d logp / d log_std = z^2 - 1
-    grads = mlp_backward(mlp_params, cache, d_mean) + [d_log_std]
+    grads = mlp_backward(mlp_params, cache, d_mean, tanh_output=True) + [d_log_std]
 
     info = PolicyInfo(
         approx_kl=float(np.mean(logp_old - logp)),
@@ -262,7 +271,7 @@ def check_gradients(seed: int = 0, batch: int = 16, obs_dim: int = 4, act_dim: i
     ret = rng.normal(size=batch)
     pi_params = mlp_init([obs_dim, *hidden, act_dim], rng) + [rng.normal(scale=0.3, size=act_dim)]
     v_params = mlp_init([obs_dim, *hidden, 1], rng)
-    mean, _ = mlp_forward(pi_params[:-1], obs)
+    mean, _ = mlp_forward(pi_params[:-1], obs, tanh_output=True)
     logp_old = gaussian_log_prob(mean, pi_params[-1], act) + rng.normal(scale=0.3, size=batch)
 
     _, pi_analytic, info = policy_loss_and_grads(pi_params, obs, act, adv, logp_old,
@@ -407,17 +416,28 @@ def compute_advantages(ro: Rollout, gamma: float, lam: float) -> tuple[np.ndarra
 # Agent and training loop
 # ----------------------------------------------------------------------------------------------
 
+def initial_log_std(act_dim: int, init_log_std: float, last_log_std: float) -> np.ndarray:
+    """The paper's learner: `init_log_std` on every action dimension but the last, which (the
+    CompoSuite gripper) gets `last_log_std`."""
+    log_std = np.full(act_dim, init_log_std)
+    log_std[-1] = last_log_std
+    return log_std
+
+
 class ActorCritic:
+    """Policy: a Gaussian whose mean is tanh(MLP(obs)) and whose log-std is state-independent
+    (pi = [MLP params..., log_std]); critic: an MLP."""
+
     def __init__(self, obs_dim: int, act_dim: int, hidden: tuple[int, ...],
-                 init_log_std: float, rng: np.random.Generator):
-        self.pi = mlp_init([obs_dim, *hidden, act_dim], rng) + [np.full(act_dim, init_log_std)]
+                 log_std: np.ndarray, rng: np.random.Generator):
+        self.pi = mlp_init([obs_dim, *hidden, act_dim], rng) + [np.array(log_std, dtype=np.float64)]
         self.v = mlp_init([obs_dim, *hidden, 1], rng)
 
     def value(self, obs: np.ndarray) -> np.ndarray:
         return mlp_forward(self.v, obs)[0][:, 0]
 
     def act(self, obs: np.ndarray, rng: np.random.Generator):
-        mean = mlp_forward(self.pi[:-1], obs)[0]
+        mean = mlp_forward(self.pi[:-1], obs, tanh_output=True)[0]
         log_std = self.pi[-1]
         act = mean + np.exp(log_std) * rng.standard_normal(mean.shape)
         return act, gaussian_log_prob(mean, log_std, act), self.value(obs)
@@ -465,9 +485,13 @@ def train(args, env=None) -> list[dict]:
         raise SystemExit("needs flat Box observation and action spaces")
 
     rng = np.random.default_rng(args.seed)
-    agent = ActorCritic(obs_space.shape[0], act_space.shape[0], tuple(args.hidden),
-                        args.init_log_std, rng)
-    pi_opt, v_opt = Adam(agent.pi, args.pi_lr), Adam(agent.v, args.v_lr)
+    act_dim = act_space.shape[0]
+    agent = ActorCritic(obs_space.shape[0], act_dim, tuple(args.hidden),
+                        initial_log_std(act_dim, args.init_log_std, args.last_log_std), rng)
+    # The paper's learner keeps the log-std fixed (a constant, not a parameter); Spinning Up's
+    # original learns it (--learn-log-std).
+    trained_pi = agent.pi if args.learn_log_std else agent.pi[:-1]
+    pi_opt, v_opt = Adam(trained_pi, args.pi_lr), Adam(agent.v, args.v_lr)
     collector = RolloutCollector(env, seed=args.seed)
     rows = []
     try:
@@ -494,7 +518,7 @@ def train(args, env=None) -> list[dict]:
                 # iterate whose distance from the data-collecting policy is too large
                 if info.approx_kl > 1.5 * args.target_kl:
                     break
-                pi_opt.step(grads)
+                pi_opt.step(grads[:len(trained_pi)])
                 pi_iters += 1
             _, _, info = policy_loss_and_grads(agent.pi, obs, act, adv, logp_old,
                                                args.clip_ratio, args.ent_coef)
@@ -613,7 +637,14 @@ def parse_args(argv=None):
                      help="policy steps stop once approx KL > 1.5 x this")
     ppo.add_argument("--ent-coef", type=float, default=0.0, help="entropy bonus coefficient")
     ppo.add_argument("--init-log-std", type=float, default=0.0,
-                     help="initial value of the (state-independent) policy log-std")
+                     help="the (state-independent) policy log-std of every action dimension "
+                          "but the last")
+    ppo.add_argument("--last-log-std", type=float, default=-0.5,
+                     help="the log-std of the last action dimension (CompoSuite's gripper), as "
+                          "the paper's learner sets it")
+    ppo.add_argument("--learn-log-std", action="store_true",
+                     help="train the log-std with the policy (Spinning Up's original); the "
+                          "paper's learner keeps it fixed")
     ppo.add_argument("--hidden", type=int, nargs="+", default=[64, 64],
                      help="hidden layer sizes of both MLPs (tanh)")
 

@@ -47,8 +47,8 @@ def test_analytic_gradients_match_finite_differences(seed):
 def test_the_gradient_check_catches_a_wrong_gradient(monkeypatch):
     right = ppo.mlp_backward
 
-    def off_by_a_bit(params, layer_inputs, d_out):
-        grads = right(params, layer_inputs, d_out)
+    def off_by_a_bit(params, cache, d_out, **kwargs):
+        grads = right(params, cache, d_out, **kwargs)
         grads[0] = grads[0] * 1.001
         return grads
 
@@ -193,13 +193,14 @@ def test_collector_refuses_same_step_autoreset():
 # 2 and 4. short runs on Pendulum-v1
 # ------------------------------------------------------------------------------------------------
 
-def run_pendulum(tmp_path: Path, name: str, seed: int = 42) -> tuple[list[str], list[dict], Path]:
+def run_pendulum(tmp_path: Path, name: str, seed: int = 42,
+                 extra: list[str] = ()) -> tuple[list[str], list[dict], Path]:
     log, save = tmp_path / f"{name}.csv", tmp_path / f"{name}.npz"
     done = subprocess.run(
         [sys.executable, str(SCRIPT), "--gym-id", "Pendulum-v1", "--num-envs", "2",
          "--epochs", "2", "--steps-per-epoch", "400", "--max-ep-len", "100",
          "--pi-iters", "5", "--v-iters", "5", "--seed", str(seed),
-         "--log", str(log), "--save", str(save)],
+         "--log", str(log), "--save", str(save), *extra],
         capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert done.returncode == 0, done.stdout + done.stderr
     assert len([line for line in done.stdout.splitlines() if line.startswith("epoch")]) == 2
@@ -245,8 +246,22 @@ def test_pendulum_run_saves_parameters_shaped_by_the_spaces(pendulum_run):
         assert {k: params[k].shape for k in params.files} == expected
         for k in params.files:
             assert np.isfinite(params[k]).all(), k
-        # trained: log_std moved away from its initial 0
-        assert (params["log_std"] != 0.0).all()
+        # the paper's learner: the log-std is a constant, -0.5 on the last action dimension
+        assert params["log_std"].tolist() == [-0.5] * act_dim
+
+
+def test_the_policy_mean_is_squashed_and_the_log_std_learned_only_when_asked(tmp_path):
+    # The paper's policy mean is tanh(MLP): inside (-1, 1) whatever the weights.
+    rng = np.random.default_rng(0)
+    agent = ppo.ActorCritic(5, 3, (8,), ppo.initial_log_std(3, 0.0, -0.5), rng)
+    agent.pi[-3] *= 100.0  # a huge last layer: the mean saturates, never leaves the bounds
+    mean = ppo.mlp_forward(agent.pi[:-1], rng.normal(size=(64, 5)), tanh_output=True)[0]
+    assert np.abs(mean).max() <= 1.0 and np.abs(mean).max() > 0.99
+    assert agent.pi[-1].tolist() == [0.0, 0.0, -0.5]
+    # --learn-log-std trains it (Spinning Up's original)
+    _, _, save = run_pendulum(tmp_path, "learned", extra=["--learn-log-std"])
+    with np.load(save) as params:
+        assert params["log_std"].shape == (1,) and params["log_std"][0] != -0.5
 
 
 def test_same_seed_same_numbers(pendulum_run, tmp_path):
