@@ -73,6 +73,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("logs", nargs="+", type=Path, metavar="LOG.csv", help="ppo_train.py --log files")
     p.add_argument("--out", type=Path, required=True, metavar="PNG")
     p.add_argument("--title", default="PPO learning curve")
+    p.add_argument("--label", action="append", default=[], metavar="NAME",
+                   help="the legend name of each log, in their order (default: the file names)")
     p.add_argument("--return-line", nargs=2, action="append", default=[], metavar=("VALUE", "LABEL"),
                    help="a horizontal line on the return axis (repeatable)")
     args = p.parse_args(argv)
@@ -82,7 +84,10 @@ def main(argv: list[str] | None = None) -> None:
             lines.append((float(value), label))
         except ValueError:
             p.error(f"--return-line {value!r}: not a number")
-    logs = {path.stem: read_log(path) for path in args.logs}
+    if args.label and len(args.label) != len(args.logs):
+        p.error(f"{len(args.label)} --label for {len(args.logs)} logs: give one per log, or none")
+    labels = args.label or [path.stem for path in args.logs]
+    logs = {label: read_log(path) for label, path in zip(labels, args.logs)}
     try:
         plot(logs, args.out, args.title, lines)
     except ImportError:

@@ -294,6 +294,9 @@ def test_the_learning_curve_plot_draws_a_log_and_names_a_bad_one(pendulum_run, t
     empty.write_text(",".join(ppo.CSV_COLUMNS) + "\n1,400" + "," * (len(ppo.CSV_COLUMNS) - 2) + "\n")
     other = tmp_path / "other.csv"
     other.write_text("a,b\n1,2\n")
+    done = subprocess.run([sys.executable, str(PLOT_SCRIPT), str(log), str(log), "--label", "only one",
+                           "--out", str(tmp_path / "x.png")], capture_output=True, text=True, timeout=120)
+    assert done.returncode != 0 and "1 --label for 2 logs" in done.stderr, done.stderr
     for path, says in ((empty, "no epoch with a finished episode"), (other, "not a ppo_train.py log")):
         done = subprocess.run([sys.executable, str(PLOT_SCRIPT), str(path), "--out", str(tmp_path / "x.png")],
                               capture_output=True, text=True, timeout=120)
