@@ -30,7 +30,7 @@ _PRIMITIVES = {
 @dataclass
 class _Op:
     name: str | None  # None: skipped
-    kind: str         # "fixed" (count primitives), "string", "sequence" (of primitives)
+    kind: str         # "fixed" (count primitives), "string", "sequence" (of primitives), "strings"
     fmt: str = ""
     size: int = 0     # of one element, also its alignment
     count: int = 1
@@ -55,6 +55,9 @@ def _compile(cls, prefix: str, wanted: set[str]) -> list[_Op]:
             if keep:
                 raise ValueError(f"{name} is a message; ask for its fields")
             ops.extend(_compile(_message_class(slot), name + ".", wanted))
+        elif (isinstance(slot, AbstractNestedType) and not isinstance(slot, Array)
+              and isinstance(slot.value_type, AbstractString)):
+            ops.append(_Op(keep, "strings"))
         elif isinstance(slot, AbstractNestedType) and isinstance(slot.value_type, BasicType):
             fmt, size = _PRIMITIVES[slot.value_type.typename]
             if isinstance(slot, Array):
@@ -91,6 +94,12 @@ class FieldReader:
         self.ops = _merge_skips(ops)
 
     def read(self, data: bytes) -> dict:
+        try:
+            return self._read(data)
+        except struct.error as err:  # a length or count read past the end
+            raise ValueError(f"message ends at byte {len(data) - 4}: {err}") from None
+
+    def _read(self, data: bytes) -> dict:
         if len(data) < 4:
             raise ValueError("too short for a CDR encapsulation header")
         little = data[1] & 1 == 1  # CDR_LE = 0x0001, CDR_BE = 0x0000
@@ -100,11 +109,20 @@ class FieldReader:
         values = {}
         for op in self.ops:
             if op.kind == "string":
-                offset += -offset % 4
-                (length,) = struct.unpack_from(order + "I", body, offset)
+                text, offset = _read_string(body, offset, order)
                 if op.name:
-                    values[op.name] = bytes(body[offset + 4:offset + 4 + length - 1]).decode()
-                offset += 4 + length
+                    values[op.name] = text
+                continue
+            if op.kind == "strings":
+                offset += -offset % 4
+                (count,) = struct.unpack_from(order + "I", body, offset)
+                offset += 4
+                texts = []
+                for _ in range(count):
+                    text, offset = _read_string(body, offset, order)
+                    texts.append(text)
+                if op.name:
+                    values[op.name] = texts
                 continue
             count = op.count
             if op.kind == "sequence":
@@ -122,3 +140,14 @@ class FieldReader:
                     values[op.name] = np.frombuffer(body[offset:end], dtype=np.dtype(order + op.fmt)).copy()
             offset = end
         return values
+
+
+def _read_string(body: memoryview, offset: int, order: str) -> tuple[str, int]:
+    """A CDR string at `offset` (4-aligned length including the NUL, then the bytes): the text and
+    the offset after it."""
+    offset += -offset % 4
+    (length,) = struct.unpack_from(order + "I", body, offset)
+    end = offset + 4 + length
+    if end > len(body):
+        raise ValueError(f"message ends at byte {len(body)}, a string needs {end}")
+    return bytes(body[offset + 4:end - 1]).decode(), end

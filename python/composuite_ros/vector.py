@@ -169,8 +169,9 @@ class CompoSuiteRosVectorEnv(VectorEnv):
                                        "episode: call reset() first")
             self.channels[i].send_reference_action(actions[i])
         replies = self._reset_many(resetting, [None] * len(resetting)) if resetting else {}
-        arrived = self._participant.spin_for(
-            lambda: all(self.channels[i].step_arrived() for i in stepping), self.timeout)
+        arrived = self._participant.take_for(
+            lambda: all(self.channels[i].step_arrived() for i in stepping), self.timeout,
+            [sub for i in stepping for sub in self.channels[i].step_subscriptions()])
         if not arrived:
             raise next(self.channels[i] for i in stepping
                        if not self.channels[i].step_arrived()).step_lost_error()
