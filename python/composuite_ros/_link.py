@@ -21,7 +21,7 @@ import math
 import time
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields as dataclass_fields
 
 import numpy as np
 import rclpy
@@ -166,6 +166,20 @@ _OBSERVATION_FIELDS = FieldReader(Observation, [
     "task.object_id", "task.robot_id", "task.obstacle_id", "task.objective_id"])
 
 
+def read_fields(message_class):
+    """Class decorator for a dataclass whose fields are named as fields of `message_class`:
+    gives it `of_bytes(data)`, which fills it from a serialized message (one FieldReader, the
+    field list taken from the dataclass itself)."""
+
+    def decorate(view):
+        reader = FieldReader(message_class, [f.name for f in dataclass_fields(view)])
+        view.of_bytes = classmethod(lambda cls, data: cls(**reader.read(data)))
+        return view
+
+    return decorate
+
+
+@read_fields(StagedReward)
 @dataclass
 class RewardView:
     """What the Gymnasium envs use of a composuite_msgs/StagedReward."""
@@ -178,15 +192,8 @@ class RewardView:
     total: float
     success: bool
 
-    @classmethod
-    def of_bytes(cls, data: bytes) -> RewardView:
-        return cls(**_REWARD_FIELDS.read(data))
 
-
-_REWARD_FIELDS = FieldReader(StagedReward, [
-    "episode", "step", "stage_names", "stage_values", "current_stage", "total", "success"])
-
-
+@read_fields(EpisodeStatus)
 @dataclass
 class StatusView:
     """What the Gymnasium envs use of a composuite_msgs/EpisodeStatus."""
@@ -197,14 +204,6 @@ class StatusView:
     terminated: bool
     truncated: bool
     reason_text: str
-
-    @classmethod
-    def of_bytes(cls, data: bytes) -> StatusView:
-        return cls(**_STATUS_FIELDS.read(data))
-
-
-_STATUS_FIELDS = FieldReader(EpisodeStatus, [
-    "episode", "step", "done", "terminated", "truncated", "reason_text"])
 
 
 @dataclass
