@@ -22,19 +22,12 @@ from pathlib import Path
 import numpy as np
 
 import node_suite
-from node_suite import node_processes
+from node_suite import cpu_seconds, node_processes
 from composuite_ros import CompoSuiteRosEnv
 from composuite_ros.vector import CompoSuiteRosVectorEnv
 
 TASK = "IIWA/box/no_obstacle/pick_place"
 ROLES = ("sim", "reward", "task_manager")
-TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def cpu_seconds(pid: int) -> float:
-    """User + system CPU seconds of a process so far (all its threads)."""
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
 
 
 def cpu_by_role(namespace: str) -> dict[str, float]:

@@ -24,20 +24,18 @@ import threading
 import time
 from pathlib import Path
 
-from node_suite import node_processes
+from node_suite import cpu_seconds, node_processes
 
 HORIZON = 500
 # For the soak's progress lines only: bag bytes per env step measured on the default session.
 BYTES_PER_STEP_GUESS = 558
 PAGE = os.sysconf("SC_PAGE_SIZE")
-TICKS = os.sysconf("SC_CLK_TCK")
 
 
 def sample(pid: int) -> tuple[float, int] | None:
     """(CPU seconds, RSS bytes) of `pid`, or None once it is gone."""
     try:
-        fields = (Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1]).split()
-        cpu = (int(fields[11]) + int(fields[12])) / TICKS  # utime + stime
+        cpu = cpu_seconds(pid)
         rss = int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * PAGE
         return cpu, rss
     except (OSError, IndexError, ValueError):

@@ -24,6 +24,7 @@ REPO = Path(__file__).resolve().parents[2]
 NODES = ("task_manager", "sim", "reward")
 # Seconds a node gets to exit after SIGINT.
 SHUTDOWN_TIMEOUT = 5.0
+CLOCK_TICKS = os.sysconf("SC_CLK_TCK")  # units of /proc/PID/stat times
 
 
 def node_dir() -> Path:
@@ -49,6 +50,13 @@ def env_replay_path() -> Path:
             f"{path} not found: build with `cargo build -p composuite_ros --example env_replay` "
             "or set COMPOSUITE_ENV_REPLAY")
     return path
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of process `pid` so far, all its threads (/proc/PID/stat's utime
+    and stime). OSError once the process is gone."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS
 
 
 def node_processes(marker: str, kind: str | None = None) -> list[int]:
