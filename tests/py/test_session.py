@@ -9,7 +9,9 @@ import csv
 import json
 import re
 import shutil
+import signal
 import subprocess
+import time
 from pathlib import Path
 
 import msgcheck
@@ -165,6 +167,86 @@ def test_the_expert_session_succeeds(tmp_path):
     assert result.returncode == 0, result.stderr[-4000:]
     (row,) = json.loads(result.stdout)
     assert row["success"] and row["length"] == 200 and row["furthest_stage"] >= 3
+
+
+def started_session(out: Path, *args: str) -> tuple[subprocess.Popen, Path]:
+    """A `composuite session` running in the background, its stderr in a file beside `out`."""
+    node_suite.require_isolation()
+    log = out.with_suffix(".stderr")
+    with open(log, "wb") as stderr:
+        process = subprocess.Popen([str(node_suite.node_dir() / "composuite"), "session", *args,
+                                    "--out", str(out)], stdin=subprocess.DEVNULL, stdout=stderr,
+                                   stderr=stderr)
+    return process, log
+
+
+def wait_for_text(process: subprocess.Popen, log: Path, text: str, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while text not in log.read_text(errors="replace"):
+        assert process.poll() is None, f"session exited:\n{log.read_text()[-4000:]}"
+        assert time.monotonic() < deadline, f"session never said {text!r}:\n{log.read_text()[-4000:]}"
+        time.sleep(0.05)
+
+
+def session_nodes(process: subprocess.Popen, out: Path) -> list[int]:
+    """The session's environment nodes (in its namespace) and its recorder (writing into `out`)."""
+    return (node_suite.node_processes(f"__ns:=/session_{process.pid} ")
+            + node_suite.node_processes(f"output:={out}/bag"))
+
+
+def test_a_signal_stops_a_session_on_a_whole_episode_and_a_second_at_once(tmp_path):
+    """SIGTERM (what `kill`, `timeout` and systemd send) while an episode is under way: that
+    episode ends, then the environment and the recorder stop in order; the table and the bag
+    hold the same whole episodes. A second signal (SIGINT) stops at once, dropping the episode
+    under way. Either way no node is left running."""
+    for name, signals in (("once", [signal.SIGTERM]), ("twice", [signal.SIGINT, signal.SIGINT])):
+        out = tmp_path / name
+        process, log = started_session(out, "--episodes", "40", "--policy", "random", "--horizon", "100")
+        wait_for_text(process, log, "episode 2/40")
+        assert len(session_nodes(process, out)) == 4, "sim, reward, task_manager and recorder"
+        for sig in signals:
+            process.send_signal(sig)
+            time.sleep(0.05)
+        code = process.wait(timeout=60)
+        text = log.read_text()
+        assert code == 2, text[-4000:]
+        stopped = re.search(r"stopped by signal (\d+) after (\d+) of 40 episodes", text)
+        assert stopped, text[-4000:]
+        assert int(stopped[1]) == signals[0]
+        assert session_nodes(process, out) == [], "nodes left running"
+        rows = list(csv.DictReader((out / "episodes.csv").open()))
+        assert 2 <= len(rows) == int(stopped[2]) < 40
+        assert all(r["length"] == "100" for r in rows), "only whole episodes are in the table"
+        # The bag is closed (summary, metadata.yaml) and holds the table's episodes.
+        composuite("bag", "episodes", str(out / "bag"), "--csv", str(tmp_path / f"{name}.csv"))
+        from_bag = list(csv.DictReader((tmp_path / f"{name}.csv").open()))
+        whole = [r for r in from_bag if r["length"] == "100"]
+        assert [(r["seed"], r["return"]) for r in whole] == [(r["seed"], r["return"]) for r in rows]
+        if name == "once":
+            assert from_bag == whole, "the first signal lets the episode under way finish"
+            assert "finishing this episode" in text
+        else:
+            assert "stopping now" in text
+
+
+def test_a_killed_session_takes_its_nodes_with_it_and_the_bag_is_closed(tmp_path):
+    """SIGKILL leaves the session no say: its nodes learn of its death from the kernel (SIGTERM
+    on the parent's death) and shut down as on any SIGTERM, the recorder closing its bag."""
+    out = tmp_path / "k"
+    process, log = started_session(out, "--episodes", "40", "--policy", "zero", "--horizon", "100")
+    wait_for_text(process, log, "episode 1/40")
+    nodes = session_nodes(process, out)
+    assert len(nodes) == 4
+    process.kill()
+    process.wait(timeout=10)
+    deadline = time.monotonic() + 15
+    while session_nodes(process, out) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert session_nodes(process, out) == [], "nodes outlived their session"
+    assert metadata(out / "bag")["message_count"] > 0
+    recorded = bag_messages(out / "bag")
+    (commands,) = [t for t in recorded if t.endswith("/joint_command")]
+    assert len(recorded[commands]) >= 100, "the first episode's commands are in the closed bag"
 
 
 def test_bad_session_arguments_are_named(tmp_path):

@@ -46,6 +46,8 @@ pub fn run(args: &DemoArgs) -> Result<(), String> {
         return Err("--episodes must be at least 1".into());
     }
     let namespace = format!("/demo_{}", std::process::id());
+    let signals = composuite_ros::shared::node::shutdown_signal()
+        .map_err(|e| format!("cannot watch for SIGINT/SIGTERM: {e}"))?;
     let mut suite = Suite::start(&LaunchArgs::one_environment(&args.task, &namespace, "warn"))?;
     let plan = Plan {
         namespace,
@@ -54,12 +56,21 @@ pub fn run(args: &DemoArgs) -> Result<(), String> {
         seed: args.seed,
         policy: PolicyKind::Expert,
         wait_for_recorder: false,
+        signals: Some(signals),
     };
     let result = drive(&plan, &mut suite, |o| report(o, args.json));
     let clean = suite.stop();
-    let outcomes = result?;
+    let driven = result?;
+    let outcomes = driven.outcomes;
     if !clean {
         return Err("some nodes did not shut down cleanly (see above)".into());
+    }
+    if let Some(signal) = driven.interrupted {
+        return Err(format!(
+            "stopped by signal {signal} after {} of {} episodes",
+            outcomes.len(),
+            args.episodes
+        ));
     }
     if outcomes.iter().any(|o| !o.identical) {
         return Err("the suite's observations differ from the in-process environment".into());

@@ -128,6 +128,41 @@ pub struct Plan {
     /// Wait until a recorder has subscribed to the environment's topics before the first reset,
     /// so the session's messages are all recorded.
     pub wait_for_recorder: bool,
+    /// SIGINT/SIGTERM as they arrive (`shutdown_signal`); `None` lets a signal end the process.
+    pub signals: Option<async_channel::Receiver<i32>>,
+}
+
+/// What a drive played.
+pub struct Driven {
+    /// The episodes played to their end, in order.
+    pub outcomes: Vec<EpisodeOutcome>,
+    /// The signal that stopped the drive before the plan's end, if one did.
+    pub interrupted: Option<i32>,
+}
+
+/// How a drive answers SIGINT/SIGTERM: the first lets the episode under way finish, so what was
+/// recorded and tabled ends on a whole episode; a second stops at once (that episode is dropped).
+struct Interrupt {
+    signals: Option<async_channel::Receiver<i32>>,
+    first: Option<i32>,
+    now: bool,
+}
+
+impl Interrupt {
+    fn poll(&mut self) {
+        let Some(signals) = &self.signals else { return };
+        while let Ok(signal) = signals.try_recv() {
+            if self.first.is_none() {
+                self.first = Some(signal);
+                eprintln!(
+                    "\nsignal {signal}: finishing this episode, then stopping (again to stop now)"
+                );
+            } else {
+                self.now = true;
+                eprintln!("\nsignal {signal}: stopping now, without this episode");
+            }
+        }
+    }
 }
 
 /// One episode as the agent saw it.
@@ -162,7 +197,7 @@ pub fn drive(
     plan: &Plan,
     suite: &mut Suite,
     mut each: impl FnMut(&EpisodeOutcome),
-) -> Result<Vec<EpisodeOutcome>, String> {
+) -> Result<Driven, String> {
     let argv: Vec<String> = ["--ros-args", "-r", &format!("__ns:={}", plan.namespace)]
         .iter()
         .map(|s| s.to_string())
@@ -190,6 +225,11 @@ pub fn drive(
         wait_for_recorder(&node, &plan.namespace, suite)?;
     }
     let mut outcomes = Vec::new();
+    let mut interrupt = Interrupt {
+        signals: plan.signals.clone(),
+        first: None,
+        now: false,
+    };
     smol::block_on(async {
         // The three step topics as one stream (unreadable samples are None).
         let incoming = futures::stream::select(
@@ -215,6 +255,10 @@ pub fn drive(
             // The in-process twin (each reset starts from a fresh copy of its world).
             let mut twin = Env::new(task, EnvConfig::default());
             for e in 0..plan.episodes {
+                interrupt.poll();
+                if interrupt.first.is_some() {
+                    return Ok(());
+                }
                 let seed = plan.seed + e as u64;
                 let timeout = if outcomes.is_empty() {
                     STARTUP_TIMEOUT
@@ -243,6 +287,10 @@ pub fn drive(
                 let mut answered = reply.observation.header.stamp.clone();
                 let started = Instant::now();
                 loop {
+                    interrupt.poll();
+                    if interrupt.now {
+                        return Ok(());
+                    }
                     let (joints, finger) = policy.act(&twin)?;
                     // The gripper rides in the same message (a finger joint target), so arm and
                     // gripper change in the same step.
@@ -302,7 +350,10 @@ pub fn drive(
         Ok::<(), String>(())
     })?;
     node.shutdown();
-    Ok(outcomes)
+    Ok(Driven {
+        outcomes,
+        interrupted: interrupt.first,
+    })
 }
 
 /// Until a recorder reads the environment's topics: topics only a recorder subscribes to

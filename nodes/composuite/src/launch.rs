@@ -290,6 +290,43 @@ fn node_arguments(args: &LaunchArgs, kind: NodeKind, namespace: &str, index: usi
     out
 }
 
+/// What a node process does between fork and exec:
+/// - its own process group, so a Ctrl-C at the terminal reaches only the launcher, which stops
+///   the nodes in order (the environments, then the recorder, which records until they are
+///   gone) instead of all at once;
+/// - SIGTERM when the launcher dies, however it dies (even SIGKILL): the node then shuts down
+///   as on any SIGTERM — a recorder closes its bag — instead of running on, orphaned. (Linux
+///   sends it when the *thread* that spawned the node ends: the suite spawns from the main
+///   thread only.)
+/// - the recorder at a lower priority, set before the node starts any thread so that it holds
+///   for all of them: it is never on the lockstep chain and catches up in the chain's gaps.
+///
+/// # Safety
+/// Only async-signal-safe calls: it runs in the forked child of a multi-threaded process.
+unsafe fn node_process_setup(niceness: libc::c_int, launcher: libc::pid_t) -> std::io::Result<()> {
+    let failed = || Err(std::io::Error::last_os_error());
+    // SAFETY: plain system calls on the calling process; no memory is shared or allocated.
+    unsafe {
+        if libc::setpgid(0, 0) != 0 {
+            return failed();
+        }
+        if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+            return failed();
+        }
+        // The launcher may have died between fork and prctl: then no SIGTERM will come.
+        if libc::getppid() != launcher {
+            return Err(std::io::Error::from_raw_os_error(libc::ESRCH));
+        }
+        if niceness != 0 {
+            let now = libc::getpriority(libc::PRIO_PROCESS, 0);
+            if libc::setpriority(libc::PRIO_PROCESS, 0, now + niceness) != 0 {
+                return failed();
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Send `signal` to a child (it may have exited already; that is fine).
 fn signal(child: &Child, signal: i32) {
     // SAFETY: kill(2) on a pid we spawned; no memory is touched.
@@ -361,22 +398,19 @@ impl Suite {
     }
 
     fn spawn(&self, kind: NodeKind, arguments: &[String]) -> std::io::Result<Child> {
+        use std::os::unix::process::CommandExt;
         let mut command = Command::new(&self.exe);
         command.arg("node").arg(kind.name()).args(arguments);
-        if kind == NodeKind::Recorder {
-            use std::os::unix::process::CommandExt;
-            // SAFETY: the closure runs in the forked child before exec and only makes the
-            // setpriority system call, which is async-signal-safe. Set before the node starts
-            // any thread, the niceness holds for all of them.
-            unsafe {
-                command.pre_exec(|| {
-                    let now = libc::getpriority(libc::PRIO_PROCESS, 0);
-                    if libc::setpriority(libc::PRIO_PROCESS, 0, now + RECORDER_NICENESS) != 0 {
-                        return Err(std::io::Error::last_os_error());
-                    }
-                    Ok(())
-                });
-            }
+        let niceness = if kind == NodeKind::Recorder {
+            RECORDER_NICENESS
+        } else {
+            0
+        };
+        let launcher = std::process::id() as libc::pid_t;
+        // SAFETY: the closure runs in the forked child before exec and makes only system calls
+        // that are async-signal-safe (setpgid, prctl, getppid, getpriority, setpriority).
+        unsafe {
+            command.pre_exec(move || node_process_setup(niceness, launcher));
         }
         command.spawn()
     }

@@ -11,7 +11,9 @@ use clap::Args;
 use composuite_core::TaskSpec;
 
 use crate::bag::{Episode, episodes_csv};
-use crate::drive::{EpisodeOutcome, Plan, PolicyKind, drive};
+use composuite_ros::shared::node::shutdown_signal;
+
+use crate::drive::{Driven, EpisodeOutcome, Plan, PolicyKind, drive};
 use crate::launch::{LaunchArgs, Suite};
 
 /// Run a recorded headless session: the suite, the recorder, and a built-in policy as the agent.
@@ -122,6 +124,9 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
             format!("recording into {}", bag.display())
         }
     );
+    // Watched before the nodes start: a signal from then on stops the session in order (the
+    // episode under way, then the environment, then the recorder) instead of ending it there.
+    let signals = shutdown_signal().map_err(|e| format!("cannot watch for SIGINT/SIGTERM: {e}"))?;
     let mut suite = Suite::start(&launch)?;
     let plan = Plan {
         namespace: namespace.clone(),
@@ -130,14 +135,26 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
         seed: args.seed,
         policy,
         wait_for_recorder: !args.no_record,
+        signals: Some(signals),
     };
     let progress = Progress::new(total);
     let result = drive(&plan, &mut suite, |o| progress.episode(o));
     progress.finish();
     let clean = suite.stop();
-    let outcomes = result?;
+    let Driven {
+        outcomes,
+        interrupted,
+    } = result?;
     if !clean {
         return Err("some nodes did not shut down cleanly (see above)".into());
+    }
+    if outcomes.is_empty()
+        && let Some(signal) = interrupted
+    {
+        return Err(format!(
+            "stopped by signal {signal} before the first episode ended; {} holds what was recorded",
+            out.display()
+        ));
     }
     let rows: Vec<Episode> = outcomes.iter().map(|o| row(&namespace, o)).collect();
     write(&out.join("episodes.csv"), &episodes_csv(&rows))?;
@@ -167,7 +184,13 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     if outcomes.iter().any(|o| !o.identical) {
         return Err("the suite's observations differ from the in-process environment".into());
     }
-    Ok(())
+    match interrupted {
+        Some(signal) => Err(format!(
+            "stopped by signal {signal} after {} of {total} episodes; the table and the bag hold those",
+            outcomes.len()
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The session's row of an episode, in the table `composuite bag episodes` recomputes from
