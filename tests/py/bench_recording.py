@@ -1,8 +1,9 @@
 """What recording costs: the same lockstep session (`composuite session`, one environment, a
 built-in policy over ROS 2) run without the recorder (`--no-record`) and with it, alternately;
-prints lockstep steps/s of each and the ratio, the bag's bytes per env step, and the recorder's
-CPU and RSS sampled once a second over the recorded runs (RSS after warm-up, at the end, and
-its growth).
+prints lockstep steps/s of each and the ratio, each process's CPU per env step with and
+without recording (agent, sim, reward, task_manager, recorder), the bag's bytes per env step,
+and the recorder's CPU and RSS sampled once a second over the recorded runs (RSS after warm-up,
+at the end, and its growth).
 
 Run inside the loopback-only namespace; `scripts/bench-recording` does that and builds the
 release binary first. Figures only — nothing is asserted.
@@ -79,6 +80,49 @@ class RecorderWatch(threading.Thread):
             time.sleep(1.0)
 
 
+class CpuWatch(threading.Thread):
+    """CPU seconds of each process of a session — its agent (the session process itself), sim,
+    reward, task_manager and recorder — sampled once a second until the session ends: where a
+    step's CPU goes with and without the recorder."""
+
+    def __init__(self, session: subprocess.Popen, bag: Path | None):
+        super().__init__(daemon=True)
+        self.session = session
+        self.bag = bag
+        # kind -> [(wall, cpu s) first sample, last sample]
+        self.spans: dict[str, list[tuple[float, float]]] = {}
+
+    def run(self) -> None:
+        pids: dict[str, int] = {}
+        while self.session.poll() is None:
+            if len(pids) < 4:  # the agent and the environment's three nodes
+                pids["agent"] = self.session.pid
+                for kind in ("sim", "reward", "task_manager"):
+                    found = node_processes(f"__ns:=/session_{self.session.pid} ", kind)
+                    if found:
+                        pids[kind] = found[0]
+            if self.bag and "recorder" not in pids:
+                found = node_processes(f"output:={self.bag}", "recorder")
+                if found:
+                    pids["recorder"] = found[0]
+            now = time.monotonic()
+            for kind, pid in pids.items():
+                got = sample(pid)
+                if got is not None:
+                    span = self.spans.setdefault(kind, [(now, got[0])])
+                    span[1:] = [(now, got[0])]
+            time.sleep(1.0)
+
+    def ms_per_step(self, steps_per_s: float) -> dict[str, float]:
+        """Each process's CPU per env step (ms) over the sampled window."""
+        out = {}
+        for kind, span in self.spans.items():
+            (t0, c0), (t1, c1) = span[0], span[-1]
+            if t1 > t0:
+                out[kind] = 1e3 * (c1 - c0) / (t1 - t0) / steps_per_s
+        return out
+
+
 def run_session(composuite: str, task: str, policy: str, episodes: int, record: bool,
                 out: Path, report_every: float = 0.0, max_bag_size: int = 0) -> dict:
     args = [composuite, "session", "--tasks", task, "--episodes", str(episodes), "--policy", policy,
@@ -90,16 +134,20 @@ def run_session(composuite: str, task: str, policy: str, episodes: int, record: 
     start = time.monotonic()
     session = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     watch = RecorderWatch(session, out / "bag", report_every) if record else None
+    cpu = CpuWatch(session, out / "bag" if record else None)
+    cpu.start()
     if watch:
         watch.start()
     stdout, stderr = session.communicate()
     wall = time.monotonic() - start
+    cpu.join()
     if watch:
         watch.join()
     if session.returncode != 0:
         sys.exit(f"session failed ({session.returncode}):\n{stderr[-3000:]}")
     rates = re.findall(r"([\d.]+) steps/s", stderr)
     result = {"record": record, "steps_per_s": float(rates[-1]), "wall_s": wall}
+    result["cpu_ms_per_step"] = cpu.ms_per_step(result["steps_per_s"])
     if record:
         steps = episodes * HORIZON
         bag_bytes = sum(f.stat().st_size for f in (out / "bag").iterdir())
@@ -153,6 +201,13 @@ def main() -> None:
         "recording_cost_percent": 100 * (1 - with_bag / plain),
         "bag_bytes_per_step": statistics.median(r["bag_bytes_per_step"] for r in recorded),
     }
+    kinds = ("agent", "sim", "reward", "task_manager", "recorder")
+    for label, runs in (("without_recording", [r for r in results if not r["record"]]),
+                        ("recording", recorded)):
+        if runs:
+            summary[f"cpu_ms_per_step_{label}"] = {
+                k: statistics.median(r["cpu_ms_per_step"][k] for r in runs if k in r["cpu_ms_per_step"])
+                for k in kinds if any(k in r["cpu_ms_per_step"] for r in runs)}
     last = recorded[-1]
     for key in ("recorder_cpu_percent", "recorder_rss_mb_after_warmup", "recorder_rss_mb_end",
                 "recorder_rss_mb_max", "recorder_rss_growth_mb"):
@@ -167,6 +222,12 @@ def main() -> None:
     else:
         print(f"  lockstep steps/s without recording {plain:.0f}, recording {with_bag:.0f} "
               f"(recording costs {summary['recording_cost_percent']:.1f} %)")
+    for label in ("without_recording", "recording"):
+        per = summary.get(f"cpu_ms_per_step_{label}")
+        if per:
+            print(f"  CPU ms per env step, {label.replace('_', ' ')}: "
+                  + ", ".join(f"{k} {v:.2f}" for k, v in per.items())
+                  + f" (sum {sum(per.values()):.2f})")
     print(f"  bag: {summary['bag_bytes_per_step']:.0f} bytes per env step (zstd-compressed MCAP)")
     if "recorder_cpu_percent" in summary:
         print(f"  recorder (last run): CPU {summary['recorder_cpu_percent']:.0f} % of a core, RSS "

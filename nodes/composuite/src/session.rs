@@ -139,7 +139,11 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     };
     let progress = Progress::new(total);
     let result = drive(&plan, &mut suite, |o| progress.episode(o));
-    progress.finish();
+    match &result {
+        // Stopped early: the bar stays where it got to.
+        Ok(driven) if driven.interrupted.is_some() => progress.bar.abandon(),
+        _ => progress.finish(),
+    }
     let clean = suite.stop();
     let Driven {
         outcomes,
@@ -186,7 +190,7 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     }
     match interrupted {
         Some(signal) => Err(format!(
-            "stopped by signal {signal} after {} of {total} episodes; the table and the bag hold those",
+            "stopped by signal {signal} after {} of {total} episodes; the table holds those, the bag all that was recorded",
             outcomes.len()
         )),
         None => Ok(()),
