@@ -8,6 +8,7 @@
 
 pub mod arena;
 pub mod axes;
+pub mod batch;
 pub mod control;
 pub mod env;
 pub mod expert;

@@ -30,6 +30,28 @@ pub enum Action {
 }
 
 impl Action {
+    /// Whether `world` would refuse this action (what [`Action::apply`] checks first), without
+    /// touching it.
+    pub(crate) fn check(&self, world: &SimWorld) -> Result<(), EnvError> {
+        match self {
+            Action::Absolute { joints, gripper } => {
+                validate_arm_targets(world.model, joints).map_err(EnvError::Arm)?;
+                if let Some((width, effort)) = gripper {
+                    validate_gripper_width(world.model, *width, *effort)
+                        .map_err(EnvError::Gripper)?;
+                }
+                Ok(())
+            }
+            Action::Reference(a) => match a.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                Some((index, value)) => Err(EnvError::BadReferenceAction {
+                    index,
+                    value: *value,
+                }),
+                None => Ok(()),
+            },
+        }
+    }
+
     /// Validate and hand the action to the world; returns what was clamped.
     pub(super) fn apply(
         &self,
@@ -66,12 +88,7 @@ impl Action {
                 Ok(clamped)
             }
             Action::Reference(a) => {
-                if let Some((index, value)) = a.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                    return Err(EnvError::BadReferenceAction {
-                        index,
-                        value: *value,
-                    });
-                }
+                self.check(world)?;
                 let a = a.map(|v| v.clamp(-1.0, 1.0));
                 let q = world.arm_positions();
                 let goal: [f64; ARM_DOF] =
