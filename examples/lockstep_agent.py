@@ -4,10 +4,10 @@ does, in one readable file. ROS 2 Jazzy's rclpy, composuite_msgs built in your w
     composuite launch --task IIWA/box/no_obstacle/pick_place &      # the suite (lockstep)
     python examples/lockstep_agent.py --episodes 2 --steps 100      # random joint targets
 
-The protocol (README, "Lockstep"): reset through the `reset` service (the reply carries the
-step-0 observation); then per step publish `joint_command` (all seven arm joints, absolute
-targets) and wait for the `observation`, `reward` and `episode` messages of that step, matched by
-(episode, step) — never "the latest message". Every wait has a wall-clock deadline.
+The protocol (docs/src/node-suite.md, "Lockstep"): reset through the `reset` service (the reply
+carries the step-0 observation); then per step publish `joint_command` (all seven arm joints,
+absolute targets) and wait for the `observation`, `reward` and `episode` messages of that step,
+matched by (episode, step) — never "the latest message". Every wait has a wall-clock deadline.
 
 rclpy 7.1.6 notes: a private Context, an own SingleThreadedExecutor polled with spin_once (no
 spin_until_future_complete on service futures: it slows down with every call in that release).

@@ -1,6 +1,6 @@
 //! The generated types against their sources: the .msg files, Jazzy's type hashes, the
 //! rosbag2 definition layout, the reference's observation layout
-//! (docs/reference-facts.md §5), and round trips.
+//! (docs/src/reference-facts.md §5), and round trips.
 
 mod support;
 
@@ -385,7 +385,7 @@ fn flat_len(desc: &TypeDescription) -> usize {
         .sum()
 }
 
-/// docs/reference-facts.md §5: object 14, obstacle 14, goal 17, task one-hots 4 x 4, robot 32;
+/// docs/src/reference-facts.md §5: object 14, obstacle 14, goal 17, task one-hots 4 x 4, robot 32;
 /// 93 with the task indicator, 77 without.
 #[test]
 fn observation_factors_have_the_reference_sizes() {

@@ -1,4 +1,4 @@
-"""examples/lockstep_agent.py — the rclpy agent the README points users to — against a running
+"""examples/lockstep_agent.py — the rclpy agent the docs point users to — against a running
 suite: as a library (reset, steps, observations bit-identical to the in-process reference) and as
 a script. Only run inside scripts/netns-isolate."""
 

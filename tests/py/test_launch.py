@@ -379,7 +379,7 @@ def test_robot_description_and_tf_static_place_the_arm_for_rviz():
         transform = statics.wait_for(None, timeout=20).transforms[0]
         description = urdf.wait_for(None, timeout=20).data
     # Panda's URDF root link, at CompoSuite's robot base position
-    # (docs/reference-facts.md §2.7: -0.5, -0.1, 0.912).
+    # (docs/src/reference-facts.md §2.7: -0.5, -0.1, 0.912).
     assert transform.header.frame_id == "world" and transform.child_frame_id == "link0"
     t = transform.transform.translation
     assert (t.x, t.y, t.z) == (-0.5, -0.1, 0.912)

@@ -1,7 +1,7 @@
 """`composuite tasks --split ...` against CPython itself.
 
 The reference benchmark draws its train/test splits with CPython's global `random` module
-(docs/reference-facts.md §7.2). Here that algorithm is written out in Python from that
+(docs/src/reference-facts.md §7.2). Here that algorithm is written out in Python from that
 description, run with CPython's own `random`, and its lists (reference names mapped to wire names)
 must equal the JSON of the `composuite` binary for many seeds, every experiment, several elements
 and sizes.

@@ -1,5 +1,5 @@
 //! `composuite bench`: in-process speed of whole tasks, measured like the reference was
-//! (docs/reference-speed.md): random actions, a reset every 500 steps, one core.
+//! (docs/src/reference-speed.md): random actions, a reset every 500 steps, one core.
 
 use std::time::Instant;
 

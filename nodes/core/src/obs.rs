@@ -1,4 +1,4 @@
-//! Observations, factored as the reference benchmark factors them (docs/reference-facts.md §5):
+//! Observations, factored as the reference benchmark factors them (docs/src/reference-facts.md §5):
 //! object, obstacle, goal, task one-hots and robot proprioception, plus the flat vector its Gym
 //! wrapper produces (93 values with the task indicator, 77 without). Quaternions are (x, y, z, w).
 
@@ -114,9 +114,9 @@ pub fn xyzw(q: &UnitQuaternion<f64>) -> [f64; 4] {
 /// At a half turn (w = 0 to float32 precision) the reference keeps whatever sign its float32
 /// LAPACK eigen-solver produced, which is rounding noise: the same matrix gives opposite signs
 /// under numba's eigh (scipy's OpenBLAS, robosuite's default) and numpy's (measured on the iiwa's
-/// start pose, `docs/differences-from-reference.md`). Here a half turn gets the sign whose first
-/// non-zero vector component is positive, which is what the reference gives on every start pose
-/// recorded in `tests/reference/data/step0.json.gz`.
+/// start pose, `docs/src/differences-from-reference.md`). Here a half turn gets the sign whose
+/// first non-zero vector component is positive, which is what the reference gives on every start
+/// pose recorded in `tests/reference/data/step0.json.gz`.
 pub fn reference_sign(q: UnitQuaternion<f64>) -> UnitQuaternion<f64> {
     let flip = if q.w.abs() < HALF_TURN_W {
         [q.i, q.j, q.k]

@@ -3,11 +3,11 @@
 //! The reference uses two generators, both MT19937 but seeded and consumed differently:
 //!
 //! * CPython's `random` module shuffles the task list of `sample_tasks`
-//!   (docs/reference-facts.md §7.2):
+//!   (docs/src/reference-facts.md §7.2):
 //!   [`Mt19937::python_seed`], [`Mt19937::getrandbits`], [`Mt19937::randbelow`],
 //!   [`Mt19937::shuffle`].
 //! * numpy's legacy global generator (`np.random`) places the object at each reset
-//!   (docs/reference-facts.md §7.3): [`Mt19937::numpy_seed`], [`Mt19937::random_sample`],
+//!   (docs/src/reference-facts.md §7.3): [`Mt19937::numpy_seed`], [`Mt19937::random_sample`],
 //!   [`Mt19937::uniform`], [`Mt19937::standard_normal`].
 //!
 //! Every function follows its reference step by step, because the point is bit-exact
@@ -232,8 +232,8 @@ impl Mt19937 {
     /// numpy's legacy `np.random.standard_normal()` (also `randn`): Marsaglia's polar form of
     /// Box–Muller. Each accepted pair `(x1, x2)` yields two normals: `f·x2` is returned now and
     /// `f·x1` is cached and returned by the next call without drawing. The cache matters: the
-    /// reference draws 7 normals per reset (docs/reference-facts.md §7.3), an odd number, so the
-    /// next reset starts with a cached value.
+    /// reference draws 7 normals per reset (docs/src/reference-facts.md §7.3), an odd number, so
+    /// the next reset starts with a cached value.
     ///
     /// The arithmetic is numpy's, operation for operation (`sqrt(-2·ln r² / r²)`). `sqrt` is
     /// exact in IEEE 754; `ln` comes from the platform's libm, the same one numpy calls, so the

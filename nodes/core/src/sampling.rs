@@ -1,5 +1,5 @@
 //! Train/test task splits, identical to the reference benchmark's `sample_tasks`
-//! (docs/reference-facts.md §7.2), so a seed gives the paper's experiments the same task lists.
+//! (docs/src/reference-facts.md §7.2), so a seed gives the paper's experiments the same task lists.
 //!
 //! Three experiments: `default` (uniform over the 256 tasks), `smallscale` (only the 64 tasks
 //! containing one element) and `holdout` (train on tasks without an element plus exactly one
@@ -250,7 +250,7 @@ pub fn reference_tasks() -> Vec<TaskSpec> {
 }
 
 /// The reference's `sample_tasks(experiment, num_train, smallscale_elem / holdout_elem,
-/// shuffling_seed = seed, no_shuffle)`, task for task (docs/reference-facts.md §7.2):
+/// shuffling_seed = seed, no_shuffle)`, task for task (docs/src/reference-facts.md §7.2):
 ///
 /// 1. List the tasks in [`reference_tasks`] order; `smallscale` keeps only the 64 with
 ///    `element` (the same as reducing its axis to that one element).

@@ -119,7 +119,7 @@ fn models_have_seven_arm_joints_and_two_coupled_fingers() {
         ] {
             assert!(model.links.contains_key(name), "{robot:?}: {name}");
         }
-        // Reference effort limits (docs/reference-facts.md §4.1).
+        // Reference effort limits (docs/src/reference-facts.md §4.1).
         let efforts: Vec<f64> = model.joints[..7].iter().map(|j| j.effort).collect();
         let expected = match robot {
             Robot::Iiwa => vec![176.0, 176.0, 110.0, 110.0, 110.0, 40.0, 40.0],
@@ -269,7 +269,7 @@ fn simulated_link_poses_match_an_independent_fk() {
     eprintln!("worst link position error: {worst:.2e} m");
 }
 
-/// The reference's grip site right after reset (docs/reference-facts.md §2.7: CompoSuite +
+/// The reference's grip site right after reset (docs/src/reference-facts.md §2.7: CompoSuite +
 /// robosuite 1.4 + MuJoCo).
 #[test]
 fn grip_site_at_reset_matches_the_reference() {

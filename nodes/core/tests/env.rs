@@ -14,8 +14,8 @@ fn env(task: &str) -> Env {
     Env::new(task.parse().unwrap(), EnvConfig::default())
 }
 
-/// Object starts computed with numpy's own generator, following docs/reference-facts.md §7.3's draw
-/// order (7 normals; 2 obstacle uniforms if any; x, y per attempt with rejection).
+/// Object starts computed with numpy's own generator, following docs/src/reference-facts.md §7.3's
+/// draw order (7 normals; 2 obstacle uniforms if any; x, y per attempt with rejection).
 #[test]
 fn starts_match_numpy_for_the_same_seed() {
     let pinned = [
@@ -98,8 +98,8 @@ fn observation_layout_matches_the_reference() {
     let obs = e.reset(3).unwrap();
     let flat = obs.flat();
     assert_eq!(flat.len(), FLAT_SIZE_WITH_TASK);
-    // Index ranges (docs/reference-facts.md §5): object 0-13, obstacle 14-27, goal 28-44, one-hots
-    // 45-60 (object, robot, obstacle, objective), proprio 61-92.
+    // Index ranges (docs/src/reference-facts.md §5): object 0-13, obstacle 14-27, goal 28-44,
+    // one-hots 45-60 (object, robot, obstacle, objective), proprio 61-92.
     assert_eq!(&flat[0..3], &obs.object.position);
     assert_eq!(&flat[14..17], &[0.0; 3], "no obstacle: position 0");
     assert_eq!(&flat[17..21], &[0.0; 4], "no obstacle: zero quaternion");
@@ -202,7 +202,7 @@ fn episodes_end_and_refuse_further_steps() {
 }
 
 /// Push ends as soon as the object is more than 10 cm above the bin top
-/// (docs/reference-facts.md §1): grasp the box through the environment's own actions (absolute
+/// (docs/src/reference-facts.md §1): grasp the box through the environment's own actions (absolute
 /// targets from IK) and lift it.
 #[test]
 fn push_terminates_when_the_object_is_lifted() {
@@ -296,7 +296,7 @@ fn same_seed_and_actions_give_bit_identical_trajectories() {
     }
 }
 
-/// docs/reference-facts.md §4.3: the reference's gripper command c starts at 0 with the fingers
+/// docs/src/reference-facts.md §4.3: the reference's gripper command c starts at 0 with the fingers
 /// open, so with a[7] = 0 the fingers drift half closed; +1 closes them in 4 steps.
 #[test]
 fn reference_gripper_follows_the_sign_of_the_action() {

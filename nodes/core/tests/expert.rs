@@ -7,7 +7,7 @@ use composuite_core::expert::run_episode;
 /// joint 7, as in the reference), the Jaco's torque-limited wrist lets the box it carries just
 /// under the 0.9 m line tilt and dip as the carry starts; on seeds 1 and 7 the box, tilted in
 /// the pads, then rises over the line, which ends a Push episode (8 of seeds 0–9 succeed; the
-/// README's expert table).
+/// expert's table in docs/src/expert.md).
 const JACO_BOX_PUSH_SEEDS: [u64; 2] = [0, 2];
 
 /// Every objective, robot, object and obstacle at least once: each task succeeds on seeds 0
@@ -124,7 +124,8 @@ fn the_expert_pushes_from_behind_the_door_without_a_grasp() {
 /// end nearest the robot and slides it in through that end, the gripper pointing +x.
 /// The dumbbell runs on seed 3: since it has the reference's torsional friction it no longer
 /// swings in the pads, and on seeds 0, 4 and 7 the carry planned from its grasp drives joint 4
-/// into its limit, where the planned joints jump and the arm swings wild (README, expert table).
+/// into its limit, where the planned joints jump and the arm swings wild (docs/src/expert.md,
+/// the tasks below 0.5).
 #[test]
 fn the_expert_inserts_through_the_shelfs_near_end() {
     use composuite_core::env::{Env, EnvConfig};

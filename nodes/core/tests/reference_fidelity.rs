@@ -1,7 +1,7 @@
 //! The port against the reference benchmark running: episodes recorded from CompoSuite 1fa36f6
 //! on robosuite 1.4.0 / MuJoCo 2.3.7 (`tests/reference/`, how they were made and how to make
 //! them again). The bounds below are the documented ones of
-//! `docs/differences-from-reference.md` ("Measured against the reference").
+//! `docs/src/differences-from-reference.md` ("Measured against the reference").
 
 mod reference;
 
@@ -296,7 +296,7 @@ fn scripted_grasps_succeed_in_both_engines_alike() {
 }
 
 /// Bounds of [`scripted_grasps_succeed_in_both_engines_alike`] (measured: see its comment and
-/// `docs/differences-from-reference.md`).
+/// `docs/src/differences-from-reference.md`).
 const GRASP_EPISODES_ENDING_DIFFERENTLY: usize = 2;
 const GRASP_SUCCESS_STEPS: usize = 60;
 const GRASP_FLAG_AGREEMENT: f64 = 0.97;

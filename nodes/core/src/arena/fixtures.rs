@@ -1,11 +1,11 @@
 //! The fixed furniture beyond the bins: the trash can (Trashcan), the shelf (Shelf), the
-//! robot's base and the ground. docs/reference-facts.md §2, §2.5–§2.7.
+//! robot's base and the ground. docs/src/reference-facts.md §2, §2.5–§2.7.
 
 use super::bins::BIN2_POSITION;
 use super::primitive::{Friction, Part, Primitive};
 
-/// The trash can's code constants (docs/reference-facts.md §2.5). The reward's in-can box and lift
-/// target are built from these.
+/// The trash can's code constants (docs/src/reference-facts.md §2.5). The reward's in-can box and
+/// lift target are built from these.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrashCanDims {
     /// Body position (m): on the bin-2 floor (top z 0.82), centred on bin 2.
@@ -18,7 +18,7 @@ pub struct TrashCanDims {
     pub height: f64,
 }
 
-/// The trash can (docs/reference-facts.md §2.5).
+/// The trash can (docs/src/reference-facts.md §2.5).
 pub const TRASH_CAN: TrashCanDims = TrashCanDims {
     position: [0.1, 0.18, 0.825],
     half_size: 0.08,
@@ -26,7 +26,7 @@ pub const TRASH_CAN: TrashCanDims = TrashCanDims {
     height: 0.08,
 };
 
-/// Local z of the four walls' centres (docs/reference-facts.md §2.5): walls span
+/// Local z of the four walls' centres (docs/src/reference-facts.md §2.5): walls span
 /// z 0.8255…0.9855 in the world.
 const TRASH_CAN_WALL_Z: f64 = 0.0805;
 
@@ -40,10 +40,10 @@ const fn can_part(name: &'static str, half: [f64; 3], offset: [f64; 3]) -> Part 
 }
 
 const CAN_H: f64 = TRASH_CAN.half_size;
-// Walls are as thick as the floor (docs/reference-facts.md §2.5).
+// Walls are as thick as the floor (docs/src/reference-facts.md §2.5).
 const CAN_T: f64 = TRASH_CAN.z_offset;
 
-/// The trash can's floor and four walls, in its body frame (docs/reference-facts.md §2.5).
+/// The trash can's floor and four walls, in its body frame (docs/src/reference-facts.md §2.5).
 pub(crate) const TRASH_CAN_PARTS: &[Part] = &[
     can_part("trash_can/floor", [CAN_H, CAN_H, CAN_T], [0.0, 0.0, 0.0]),
     can_part(
@@ -68,8 +68,8 @@ pub(crate) const TRASH_CAN_PARTS: &[Part] = &[
     ),
 ];
 
-/// The shelf's code constants (docs/reference-facts.md §2.6). The reward's in-shelf and in-front
-/// boxes, the approach target and the goal marker are built from these.
+/// The shelf's code constants (docs/src/reference-facts.md §2.6). The reward's in-shelf and
+/// in-front boxes, the approach target and the goal marker are built from these.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShelfDims {
     /// Body position (m): bin 2 + (0, y_size + thickness, 0) = (0.1, 0.33, 0.8).
@@ -89,7 +89,7 @@ pub struct ShelfDims {
 const SHELF_Y_SIZE: f64 = 0.1;
 const SHELF_THICKNESS: f64 = 0.05;
 
-/// The shelf (docs/reference-facts.md §2.6), placed from bin 2's position as the reference
+/// The shelf (docs/src/reference-facts.md §2.6), placed from bin 2's position as the reference
 /// places it.
 pub const SHELF: ShelfDims = ShelfDims {
     position: [
@@ -113,8 +113,8 @@ const fn shelf_part(name: &'static str, half: [f64; 3], offset: [f64; 3]) -> Par
     )
 }
 
-/// The shelf's three blocks, in its body frame (docs/reference-facts.md §2.6). It opens towards −y
-/// (bin 1) and at both x ends; the free opening is z 0.945…1.10, y 0.14…0.32.
+/// The shelf's three blocks, in its body frame (docs/src/reference-facts.md §2.6). It opens towards
+/// −y (bin 1) and at both x ends; the free opening is z 0.945…1.10, y 0.14…0.32.
 pub(crate) const SHELF_PARTS: &[Part] = &[
     // Back panel: x −0.1…0.3, y 0.32…0.34, z 0.80…1.10.
     shelf_part("shelf/back", [0.2, 0.01, 0.15], [0.0, 0.0, 0.15]),
@@ -124,10 +124,10 @@ pub(crate) const SHELF_PARTS: &[Part] = &[
     shelf_part("shelf/top", [0.2, 0.1, 0.05], [0.0, -0.09, 0.35]),
 ];
 
-/// World position of every arm's base body (docs/reference-facts.md §2.7): robosuite's "bins"
+/// World position of every arm's base body (docs/src/reference-facts.md §2.7): robosuite's "bins"
 /// offset (−0.5, −0.1, 0) on the RethinkMount pedestal. Identity orientation, facing +x.
 pub const ROBOT_BASE_POSITION: [f64; 3] = [-0.5, -0.1, 0.912];
 
-/// Half-size in x and y (m) of the ground plane at z = 0 (docs/reference-facts.md §2). The plane is
-/// not a primitive; physics adds it as a half-space.
+/// Half-size in x and y (m) of the ground plane at z = 0 (docs/src/reference-facts.md §2). The
+/// plane is not a primitive; physics adds it as a half-space.
 pub const GROUND_HALF_SIZE: [f64; 2] = [3.0, 3.0];

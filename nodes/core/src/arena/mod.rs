@@ -2,7 +2,7 @@
 //! the object's start region, and the objects' own primitives.
 //!
 //! Every number comes from the reference's arena, obstacle and object code (CompoSuite
-//! `1fa36f6`; which files: `docs/reference-sources.md`) and is written
+//! `1fa36f6`; which files: `docs/src/reference-sources.md`) and is written
 //! once, in a table with one row per axis element: [`objective_arena`] (bins, fixture, goal),
 //! [`obstacle_geometry`] ("no obstacle" is a row with no parts) and [`object_geometry`]. The
 //! functions below compose those rows into placed primitives. Units are metres and radians;
@@ -57,9 +57,9 @@ pub fn arena_parts(objective: Objective, obstacle: Obstacle) -> Vec<Placed> {
     parts
 }
 
-/// The goal marker's body position (docs/reference-facts.md §2.4): what the `goal_pos` observation
-/// reports and what Push measures against. Its z is the reference height minus the object's bottom
-/// offset, so PickPlace and Push markers sit 2 cm below a resting object.
+/// The goal marker's body position (docs/src/reference-facts.md §2.4): what the `goal_pos`
+/// observation reports and what Push measures against. Its z is the reference height minus the
+/// object's bottom offset, so PickPlace and Push markers sit 2 cm below a resting object.
 pub fn goal_position(objective: Objective, object: Object) -> Point3<f64> {
     let layout = objective_arena(objective);
     let [rx, ry, rz] = layout.goal_reference;
@@ -83,13 +83,13 @@ pub fn goal_marker_parts(objective: Objective, object: Object) -> Vec<Placed> {
 }
 
 /// The object's collision primitives in its body frame (origin = the object's reference
-/// point, docs/reference-facts.md §3).
+/// point, docs/src/reference-facts.md §3).
 pub fn object_parts(object: Object) -> Vec<Placed> {
     primitive::place(object_geometry(object).parts, [0.0; 3], 0.0)
 }
 
 /// The robot base body's pose in the world, the same for all four arms
-/// (docs/reference-facts.md §2.7).
+/// (docs/src/reference-facts.md §2.7).
 pub fn robot_base_pose() -> Isometry3<f64> {
     Isometry3::translation(
         ROBOT_BASE_POSITION[0],
@@ -98,7 +98,7 @@ pub fn robot_base_pose() -> Isometry3<f64> {
     )
 }
 
-/// Bin 2's body position for an objective (docs/reference-facts.md §2.1).
+/// Bin 2's body position for an objective (docs/src/reference-facts.md §2.1).
 pub fn bin2_position(objective: Objective) -> Point3<f64> {
     Point3::from(Vector3::from(objective_arena(objective).bin2_position))
 }

@@ -1,5 +1,5 @@
 //! The objective table: which bins, which fixture, and where the goal marker goes, per
-//! element of the objective axis (docs/reference-facts.md §2.1, §2.4–§2.6).
+//! element of the objective axis (docs/src/reference-facts.md §2.1, §2.4–§2.6).
 
 use super::bins::{
     BIN1_PARTS, BIN1_POSITION, BIN2_PARTS, BIN2_POSITION, PUSH_BIN1_PARTS, PUSH_BIN2_PARTS,
@@ -14,7 +14,7 @@ use crate::axes::Objective;
 pub struct ObjectiveArena {
     /// The element.
     pub objective: Objective,
-    /// Bin 2's body position (m): y = 0.18, or 0.13 for Push (docs/reference-facts.md §2.1).
+    /// Bin 2's body position (m): y = 0.18, or 0.13 for Push (docs/src/reference-facts.md §2.1).
     pub bin2_position: [f64; 3],
     /// Bin 1's floor and rims, in its body frame (Push lacks the rim towards bin 2).
     pub bin1_parts: &'static [Part],
@@ -25,10 +25,10 @@ pub struct ObjectiveArena {
     /// The fixture's parts (trash can, shelf) in its body frame; none for PickPlace and Push.
     pub fixture_parts: &'static [Part],
     /// The goal marker sampler's reference point (m): bin 2, the shelf or the trash can
-    /// (docs/reference-facts.md §2.4).
+    /// (docs/src/reference-facts.md §2.4).
     pub goal_reference: [f64; 3],
     /// The marker's offset from `goal_reference` (m), before its own bottom offset is taken
-    /// off z (docs/reference-facts.md §2.4).
+    /// off z (docs/src/reference-facts.md §2.4).
     pub goal_offset: [f64; 3],
 }
 

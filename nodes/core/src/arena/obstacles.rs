@@ -1,5 +1,5 @@
 //! The obstacle table: one row per element of the obstacle axis, "no obstacle" included as a
-//! row with no parts (docs/reference-facts.md §2.2, §2.3).
+//! row with no parts (docs/src/reference-facts.md §2.2, §2.3).
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -7,8 +7,9 @@ use super::bins::{BIN1_FLOOR_HALF, BIN1_POSITION};
 use super::primitive::{Friction, Part, Primitive};
 use crate::axes::Obstacle;
 
-/// The disc an obstacle occupies for the object placement sampler (docs/reference-facts.md §2.2): a
-/// sample is rejected when its xy distance to `centre` is at most `radius` + the object's radius.
+/// The disc an obstacle occupies for the object placement sampler
+/// (docs/src/reference-facts.md §2.2): a sample is rejected when its xy distance to `centre` is at
+/// most `radius` + the object's radius.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Footprint {
     /// World xy of the obstacle body (m).
@@ -37,7 +38,7 @@ pub struct ObstacleGeometry {
     pub top_offset: f64,
     /// x range of the object's start region relative to bin 1's x, before the object's
     /// radius shrinks it (m): the central half of the floor, or only its far quarter strip
-    /// beyond an object wall or door (docs/reference-facts.md §2.2).
+    /// beyond an object wall or door (docs/src/reference-facts.md §2.2).
     pub object_x_range: [f64; 2],
 }
 
@@ -51,18 +52,19 @@ impl ObstacleGeometry {
     }
 }
 
-/// The obstacle sampler's reference height (docs/reference-facts.md §2.3): bodies sit at
+/// The obstacle sampler's reference height (docs/src/reference-facts.md §2.3): bodies sit at
 /// 0.8 − bottom_offset.
 const OBSTACLE_BASE_Z: f64 = BIN1_POSITION[2];
 
 /// The object's x range (relative to bin 1) over the whole central half of the floor
-/// (docs/reference-facts.md §2.2): ± bin1_size.x / 2.
+/// (docs/src/reference-facts.md §2.2): ± bin1_size.x / 2.
 const FULL_X_RANGE: [f64; 2] = [-(BIN1_FLOOR_HALF[0] / 2.0), BIN1_FLOOR_HALF[0] / 2.0];
-/// Beyond an object wall or door: only the far half of that range (docs/reference-facts.md §2.2).
+/// Beyond an object wall or door: only the far half of that range
+/// (docs/src/reference-facts.md §2.2).
 const BEYOND_WALL_X_RANGE: [f64; 2] = [0.0, BIN1_FLOOR_HALF[0] / 2.0];
 
-// ObjectWall and ObjectDoor share a body (docs/reference-facts.md §2.3): a quarter of the way into
-// bin 1 (x = 0.1 − 0.2/2.2), turned 90° so the wall runs along y, at z = 0.8 + 0.125.
+// ObjectWall and ObjectDoor share a body (docs/src/reference-facts.md §2.3): a quarter of the way
+// into bin 1 (x = 0.1 − 0.2/2.2), turned 90° so the wall runs along y, at z = 0.8 + 0.125.
 const OBJECT_WALL_BOTTOM: f64 = -0.125;
 const OBJECT_WALL_BODY: [f64; 3] = [
     -(BIN1_FLOOR_HALF[0] / 2.2) + BIN1_POSITION[0],
@@ -71,7 +73,7 @@ const OBJECT_WALL_BODY: [f64; 3] = [
 ];
 const OBJECT_WALL_YAW: f64 = std::f64::consts::FRAC_PI_2;
 
-// GoalWall (docs/reference-facts.md §2.3): on the seam between the bins (y = −0.26 + 0.25),
+// GoalWall (docs/src/reference-facts.md §2.3): on the seam between the bins (y = −0.26 + 0.25),
 // z = 0.8 + 0.14.
 const GOAL_WALL_BOTTOM: f64 = -0.14;
 const GOAL_WALL_BODY: [f64; 3] = [
@@ -105,7 +107,7 @@ const OBJECT_WALL: ObstacleGeometry = ObstacleGeometry {
     body_position: OBJECT_WALL_BODY,
     yaw: OBJECT_WALL_YAW,
     // 0.20 m along the body's x (world y), 1 cm thick, 0.25 m tall, raised 2 cm
-    // (docs/reference-facts.md §2.3).
+    // (docs/src/reference-facts.md §2.3).
     parts: &[wall("obstacle/wall", [0.1, 0.005, 0.125], [0.0, 0.0, 0.02])],
     footprint: &[Footprint {
         centre: [OBJECT_WALL_BODY[0], OBJECT_WALL_BODY[1]],
@@ -121,7 +123,7 @@ const OBJECT_DOOR: ObstacleGeometry = ObstacleGeometry {
     body_position: OBJECT_WALL_BODY,
     yaw: OBJECT_WALL_YAW,
     // Two 0.14 m posts at body x = ±0.16 (world y −0.42 and −0.10), leaving an 0.18 m opening
-    // with no lintel (docs/reference-facts.md §2.3).
+    // with no lintel (docs/src/reference-facts.md §2.3).
     parts: &[
         wall("obstacle/post_y-", [0.07, 0.005, 0.125], [-0.16, 0.0, 0.02]),
         wall("obstacle/post_y+", [0.07, 0.005, 0.125], [0.16, 0.0, 0.02]),
@@ -140,7 +142,7 @@ const GOAL_WALL: ObstacleGeometry = ObstacleGeometry {
     body_position: GOAL_WALL_BODY,
     yaw: 0.0,
     // On the robot-near half of the seam only: x −0.10…0.11, 28 cm tall
-    // (docs/reference-facts.md §2.3).
+    // (docs/src/reference-facts.md §2.3).
     parts: &[wall(
         "obstacle/wall",
         [0.105, 0.005, 0.14],

@@ -59,14 +59,15 @@ pub struct Friction {
 }
 
 impl Friction {
-    /// MuJoCo's default friction, which every bin and table geom uses (docs/reference-facts.md §2)
-    /// and the reference keeps for the shelf and obstacle geoms, which set none.
+    /// MuJoCo's default friction, which every bin and table geom uses
+    /// (docs/src/reference-facts.md §2) and the reference keeps for the shelf and obstacle geoms,
+    /// which set none.
     pub const TABLE: Friction = Friction {
         slide: 1.0,
         torsion: 0.005,
         roll: 0.0001,
     };
-    /// The objects' friction, (1, 1, 1) (docs/reference-facts.md §3; the plate's stem keeps
+    /// The objects' friction, (1, 1, 1) (docs/src/reference-facts.md §3; the plate's stem keeps
     /// [`Friction::TABLE`]).
     pub const OBJECT: Friction = Friction {
         slide: 1.0,
@@ -169,7 +170,7 @@ pub(crate) fn place(parts: &[Part], position: [f64; 3], yaw: f64) -> Vec<Placed>
 /// along the third: together they fill exactly one box. Kept apart, the face of one that is
 /// buried in the other still collides, and an object sliding from one onto the other catches
 /// on its top edge (the contact normal there is horizontal). The Push arena's two bin floors
-/// are such a pair: bin 2's floor starts 3.5 cm inside bin 1's (docs/reference-facts.md §2.1).
+/// are such a pair: bin 2's floor starts 3.5 cm inside bin 1's (docs/src/reference-facts.md §2.1).
 pub fn merged_solids(parts: &[Placed]) -> Vec<(usize, Placed)> {
     let mut solids: Vec<(usize, Placed)> = parts
         .iter()

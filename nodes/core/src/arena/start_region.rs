@@ -1,5 +1,5 @@
 //! Where the object may start: the placement sampler's ranges and rejection discs
-//! (docs/reference-facts.md §2.2).
+//! (docs/src/reference-facts.md §2.2).
 
 use nalgebra::Point3;
 
@@ -8,10 +8,10 @@ use super::objects::object_geometry;
 use super::obstacles::obstacle_geometry;
 use crate::axes::{Object, Obstacle};
 
-/// How many draws the reference sampler makes before giving up (docs/reference-facts.md §2.2).
+/// How many draws the reference sampler makes before giving up (docs/src/reference-facts.md §2.2).
 pub const PLACEMENT_ATTEMPTS: usize = 5000;
 
-/// The object's y range relative to bin 1 (docs/reference-facts.md §2.2): ± bin1_size.y / 2.
+/// The object's y range relative to bin 1 (docs/src/reference-facts.md §2.2): ± bin1_size.y / 2.
 const Y_RANGE: [f64; 2] = [-(BIN1_FLOOR_HALF[1] / 2.0), BIN1_FLOOR_HALF[1] / 2.0];
 
 /// A disc of the xy plane the object's origin may not start in.
@@ -78,7 +78,7 @@ fn world_interval(range: [f64; 2], reference: f64) -> [f64; 2] {
     [a.min(b) + reference, a.max(b) + reference]
 }
 
-/// Where `object` may start with `obstacle` in the scene (docs/reference-facts.md §2.2).
+/// Where `object` may start with `obstacle` in the scene (docs/src/reference-facts.md §2.2).
 pub fn object_start_region(obstacle: Obstacle, object: Object) -> StartRegion {
     let object = object_geometry(object);
     let obstacle = obstacle_geometry(obstacle);

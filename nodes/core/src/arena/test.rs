@@ -1,5 +1,5 @@
 //! The arena tables against the reference's scene (its arena, obstacle and object code and its
-//! compiled model; `docs/reference-sources.md`): every world-frame number is pinned here.
+//! compiled model; `docs/src/reference-sources.md`): every world-frame number is pinned here.
 
 use std::collections::BTreeSet;
 
@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, Vector3};
 use super::*;
 use crate::axes::AxisElement;
 
-/// Tolerance for numbers docs/reference-facts.md gives to the millimetre or better.
+/// Tolerance for numbers docs/src/reference-facts.md gives to the millimetre or better.
 const EPS: f64 = 1e-9;
 
 fn find<'a>(parts: &'a [Placed], name: &str) -> &'a Placed {
@@ -64,7 +64,8 @@ fn rows_belong_to_their_elements() {
     }
 }
 
-/// docs/reference-facts.md §2.1: bin 1 is the same in every arena; Push lacks the rim facing bin 2.
+/// docs/src/reference-facts.md §2.1: bin 1 is the same in every arena; Push lacks the rim facing
+/// bin 2.
 #[test]
 fn bin1_floor_and_rims() {
     for objective in Objective::all() {
@@ -97,8 +98,9 @@ fn bin1_floor_and_rims() {
     assert_eq!(BIN1_FLOOR_HALF, [0.2, 0.25, 0.02]);
 }
 
-/// docs/reference-facts.md §2.1: bin 2 at y 0.18 (PickPlace included, despite its class default) or
-/// 0.13 for Push, whose wall facing bin 1 is absent and whose floor overlaps bin 1's by 3.5 cm.
+/// docs/src/reference-facts.md §2.1: bin 2 at y 0.18 (PickPlace included, despite its class
+/// default) or 0.13 for Push, whose wall facing bin 1 is absent and whose floor overlaps bin 1's by
+/// 3.5 cm.
 #[test]
 fn bin2_floor_and_walls() {
     for objective in Objective::all() {
@@ -138,7 +140,8 @@ fn bin2_floor_and_walls() {
     assert_eq!(BIN2_FLOOR_HALF, [0.2, 0.175, 0.02]);
 }
 
-/// docs/reference-facts.md §2.3, ObjectWall: 0.20 m along y, 1 cm thick, z 0.82…1.07, across bin 1.
+/// docs/src/reference-facts.md §2.3, ObjectWall: 0.20 m along y, 1 cm thick, z 0.82…1.07, across
+/// bin 1.
 #[test]
 fn object_wall() {
     let row = obstacle_geometry(Obstacle::ObjectWall);
@@ -173,7 +176,7 @@ fn object_wall() {
     assert_eq!((row.bottom_offset, row.top_offset), (-0.125, 0.125));
 }
 
-/// docs/reference-facts.md §2.3, ObjectDoor: two posts with an 0.18 m opening centred on
+/// docs/src/reference-facts.md §2.3, ObjectDoor: two posts with an 0.18 m opening centred on
 /// y = −0.26, open top.
 #[test]
 fn object_door() {
@@ -213,7 +216,7 @@ fn object_door() {
     );
 }
 
-/// docs/reference-facts.md §2.3, GoalWall: on the seam between the bins, robot-near half only,
+/// docs/src/reference-facts.md §2.3, GoalWall: on the seam between the bins, robot-near half only,
 /// 28 cm tall.
 #[test]
 fn goal_wall() {
@@ -239,8 +242,8 @@ fn goal_wall() {
     assert_eq!((row.bottom_offset, row.top_offset), (-0.14, 0.14));
 }
 
-/// docs/reference-facts.md §2.3 and STYLE D6: "no obstacle" is a row with nothing in it, reported
-/// at the origin.
+/// docs/src/reference-facts.md §2.3 and STYLE D6: "no obstacle" is a row with nothing in it,
+/// reported at the origin.
 #[test]
 fn no_obstacle_is_an_empty_row() {
     let row = obstacle_geometry(Obstacle::NoObstacle);
@@ -264,7 +267,7 @@ fn no_obstacle_is_an_empty_row() {
     assert_eq!(counts, [10, 8, 15, 13]);
 }
 
-/// docs/reference-facts.md §2.5: the trash can stands on bin 2's floor inside bin 2.
+/// docs/src/reference-facts.md §2.5: the trash can stands on bin 2's floor inside bin 2.
 #[test]
 fn trash_can() {
     assert_eq!(TRASH_CAN.position, [0.1, 0.18, 0.825]);
@@ -308,7 +311,7 @@ fn trash_can() {
     }
 }
 
-/// docs/reference-facts.md §2.6: the shelf opens towards bin 1; free opening z 0.945…1.10,
+/// docs/src/reference-facts.md §2.6: the shelf opens towards bin 1; free opening z 0.945…1.10,
 /// y 0.14…0.32.
 #[test]
 fn shelf() {
@@ -353,8 +356,8 @@ fn shelf() {
     assert!(names(&parts).contains(&"bin2/wall_y+"));
 }
 
-/// docs/reference-facts.md §2.4: the goal marker's xy per objective and its z for all 16 objective
-/// × object pairs (reference height + offset − the object's bottom offset).
+/// docs/src/reference-facts.md §2.4: the goal marker's xy per objective and its z for all 16
+/// objective × object pairs (reference height + offset − the object's bottom offset).
 #[test]
 fn goal_positions() {
     let objects = [
@@ -403,7 +406,7 @@ fn goal_positions() {
     }
 }
 
-/// docs/reference-facts.md §3 notes: the goal markers' cosmetic differences.
+/// docs/src/reference-facts.md §3 notes: the goal markers' cosmetic differences.
 #[test]
 fn goal_marker_shapes() {
     let dumbbell = goal_marker_parts(Objective::Push, Object::Dumbbell);
@@ -431,7 +434,7 @@ fn goal_marker_shapes() {
     assert_eq!(boxed[0].shape, object_parts(Object::Box)[0].shape);
 }
 
-/// docs/reference-facts.md §3: shapes, masses (1000 kg/m³ × collision volume + 0.001 kg per
+/// docs/src/reference-facts.md §3: shapes, masses (1000 kg/m³ × collision volume + 0.001 kg per
 /// material copy, within 1 g of the runtime masses), friction, sampler offsets and spawn heights.
 #[test]
 fn objects() {
@@ -525,8 +528,8 @@ fn objects() {
     );
 }
 
-/// docs/reference-facts.md §2.2: the start ranges in world coordinates, the spawn height and the
-/// rejection discs, for every obstacle × object.
+/// docs/src/reference-facts.md §2.2: the start ranges in world coordinates, the spawn height and
+/// the rejection discs, for every obstacle × object.
 #[test]
 fn start_regions() {
     for obstacle in Obstacle::all() {
@@ -600,7 +603,7 @@ fn start_regions() {
     assert_eq!(PLACEMENT_ATTEMPTS, 5000);
 }
 
-/// docs/reference-facts.md §2.7.
+/// docs/src/reference-facts.md §2.7.
 #[test]
 fn robot_base() {
     assert_eq!(robot_base_pose(), Isometry3::translation(-0.5, -0.1, 0.912));
@@ -657,9 +660,9 @@ fn aabb_of_a_turned_cylinder() {
     );
 }
 
-/// In Push the two bin floors fill one box (docs/reference-facts.md §2.1: they overlap by 3.5 cm);
-/// they collide as that one box, so nothing sliding from bin 1 to bin 2 catches on bin 2's buried
-/// edge. Elsewhere the floors are apart and every solid collides as it is.
+/// In Push the two bin floors fill one box (docs/src/reference-facts.md §2.1: they overlap by 3.5
+/// cm); they collide as that one box, so nothing sliding from bin 1 to bin 2 catches on bin 2's
+/// buried edge. Elsewhere the floors are apart and every solid collides as it is.
 #[test]
 fn flush_floors_collide_as_one_box() {
     for objective in Objective::all() {

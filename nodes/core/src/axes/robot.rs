@@ -30,7 +30,7 @@ impl AxisElement for Robot {
 
 impl Robot {
     /// The joint positions every episode starts from (rad): robosuite's defaults, which the
-    /// reference uses unchanged and without noise (docs/reference-facts.md §4.1).
+    /// reference uses unchanged and without noise (docs/src/reference-facts.md §4.1).
     pub fn init_qpos(self) -> [f64; 7] {
         use std::f64::consts::PI;
         match self {

@@ -19,7 +19,8 @@ fn check_table<E: AxisElement>(wire: [&str; 4]) {
     }
 }
 
-/// Wire names from DESIGN.md; the reference orders from docs/reference-facts.md §5 and §7.2.
+/// Wire names as docs/src/tasks-and-environment.md lists them; the reference orders from
+/// docs/src/reference-facts.md §5 and §7.2.
 #[test]
 fn tables_match_the_design_and_the_reference() {
     check_table::<Robot>(["IIWA", "Jaco", "Gen3", "Panda"]);
@@ -131,8 +132,8 @@ fn the_256_tasks_and_their_indices() {
     let mut reference_ids: Vec<usize> = tasks.iter().map(|t| t.reference_task_id()).collect();
     reference_ids.sort();
     assert_eq!(reference_ids, (0..256).collect::<Vec<_>>());
-    // docs/reference-facts.md §7.2: index = 64·robot + 16·object + 4·obstacle + objective over the
-    // reference lists.
+    // docs/src/reference-facts.md §7.2: index = 64·robot + 16·object + 4·obstacle + objective over
+    // the reference lists.
     let first: TaskSpec = "IIWA/Box/None/PickPlace".parse().unwrap();
     assert_eq!(first.reference_task_id(), 0);
     let t: TaskSpec = "Kinova3/Dumbbell/GoalWall/Shelf".parse().unwrap();

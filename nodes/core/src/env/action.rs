@@ -6,7 +6,8 @@ use crate::physics::{ARM_DOF, GripperCommand, ServoMode, SimWorld, pad_gap};
 
 use super::EnvError;
 
-/// How far the reference's joint goal moves per unit action (rad), docs/reference-facts.md §4.2.
+/// How far the reference's joint goal moves per unit action (rad),
+/// docs/src/reference-facts.md §4.2.
 const REFERENCE_DELTA_SCALE: f64 = 0.05;
 
 /// An opening change smaller than this (m) counts as "hold" when an absolute gripper command

@@ -239,9 +239,9 @@ impl Env {
     }
 
     /// Start an episode: the arm at its initial pose with the gripper open, the object at the
-    /// start the reference draws for `seed` (numpy seeding, docs/reference-facts.md §2.2 and §7.3).
-    /// The physics starts from a fresh copy of the task's world, so an episode depends only on
-    /// its seed and actions.
+    /// start the reference draws for `seed` (numpy seeding, docs/src/reference-facts.md §2.2
+    /// and §7.3). The physics starts from a fresh copy of the task's world, so an episode depends
+    /// only on its seed and actions.
     pub fn reset(&mut self, seed: u64) -> Result<Observation, EnvError> {
         let start = sample_object_start(self.task.obstacle, self.task.object, seed)?;
         self.world = self.template.fresh_copy();

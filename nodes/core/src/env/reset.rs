@@ -10,7 +10,7 @@ use crate::rng::Mt19937;
 /// The largest seed: the reference seeds numpy's legacy generator, which takes 32 bits.
 pub const MAX_SEED: u64 = u32::MAX as u64;
 
-/// Where the object starts for `seed` (docs/reference-facts.md §7.3). The draws, in order: 7
+/// Where the object starts for `seed` (docs/src/reference-facts.md §7.3). The draws, in order: 7
 /// standard normals for the robot's initialisation noise (scaled by 0 in the reference, but
 /// consumed); 2 uniforms for the obstacle's placement (over an empty range) when there is one; x
 /// then y of the object, redrawn while the obstacle's disc rejects them; 2 uniforms for the goal

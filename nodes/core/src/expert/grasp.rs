@@ -46,14 +46,14 @@ const PLATE_PITCH: f64 = 0.38;
 const PLATE_ROLL: f64 = 0.14;
 /// How far inside the plate's rim the pads' centre goes (m); the pads are 3.3 cm long.
 const PLATE_PAD_INSIDE_RIM: f64 = 0.012;
-/// Height of the plate's disc centre above the plate's origin (m, docs/reference-facts.md §3).
+/// Height of the plate's disc centre above the plate's origin (m, docs/src/reference-facts.md §3).
 const PLATE_DISC_Z: f64 = 0.02;
 /// Opening (m) while the pads slide over and under the plate's rim: the lower finger must stay
 /// above bin 1's floor, 3.3 cm below the disc.
 const PLATE_OPEN: f64 = 0.044;
 
 /// Horizontal distance (m) from the hollow box's origin to the middle of a wall
-/// (docs/reference-facts.md §3: walls 1.6 cm thick centred at ±0.03).
+/// (docs/src/reference-facts.md §3: walls 1.6 cm thick centred at ±0.03).
 const HOLLOW_BOX_WALL_OFFSET: f64 = 0.03;
 /// Height (m) of the pads' centre above the hollow box's origin: the pads (3.3 cm long)
 /// cover the wall's upper part (walls reach z 0.06), the fingertips stay above the base.

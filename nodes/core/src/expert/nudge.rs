@@ -263,7 +263,7 @@ mod tests {
     #[test]
     fn round_the_goal_wall_the_push_turns_in_front_of_its_free_end() {
         let goal = Point2::new(0.1, 0.13);
-        // The goal wall spans x -0.10…0.11 at y -0.015…-0.005 (docs/reference-facts.md §2.3).
+        // The goal wall spans x -0.10…0.11 at y -0.015…-0.005 (docs/src/reference-facts.md §2.3).
         let wall = (
             Point3::new(-0.10, -0.015, 0.82),
             Point3::new(0.11, -0.005, 1.1),
@@ -281,7 +281,7 @@ mod tests {
                 let mut from = start.xy();
                 for w in via.iter().chain([&goal]) {
                     assert!(path_gap(from, *w, &wall) >= r + 0.01 - 1e-9, "{from} → {w}");
-                    // Inside bin 2's far wall (x 0.29, docs/reference-facts.md §2.1).
+                    // Inside bin 2's far wall (x 0.29, docs/src/reference-facts.md §2.1).
                     assert!(w.x + r <= 0.29, "{w}");
                     from = *w;
                 }

@@ -93,7 +93,7 @@ const PUSH_SIDE_CARRY_Z: f64 = 0.885;
 /// 0/10). 16 dumbbell pushes × 10 seeds: 11.6 → 12.3 (Jaco goal wall 0 → 0.5, IIWA 0.4 → 0.6).
 /// The plate does worse this low (plate pushes 12.6 → 10.5: its rim drags on the floor).
 const DUMBBELL_PUSH_LIFT: f64 = 0.01;
-/// Inner face of bin 2's far wall (x, m; docs/reference-facts.md §2.1).
+/// Inner face of bin 2's far wall (x, m; docs/src/reference-facts.md §2.1).
 const BIN2_FAR_WALL_X: f64 = 0.29;
 /// x (m) of a lane further out than [`AROUND_GOAL_WALL_X`], for arms whose wrist swings wide.
 const PUSH_WIDE_LANE_X: f64 = 0.26;
@@ -173,7 +173,7 @@ const SHELF_SWING_PENALTY: f64 = 0.02;
 /// Turns of a side-grasped object's gripper about the vertical (rad) on its way into bin 2,
 /// tried in this order with each spot of [`BIN2_SIDE_SPOTS`].
 const CARRY_YAWS: [f64; 5] = [0.0, 0.35, -0.35, 0.7, -0.7];
-/// Top of bin 2's floor (m, docs/reference-facts.md §2.1).
+/// Top of bin 2's floor (m, docs/src/reference-facts.md §2.1).
 const PICK_PLACE_FLOOR: f64 = 0.82;
 /// Highest the origin of a side-grasped object is lowered to in bin 2 (m): under the bin's
 /// 0.9 m success line, so the wrist stays as high as it can above the bin's walls.

@@ -57,14 +57,14 @@ pub struct ArmGains {
 impl ArmGains {
     /// The gains used for `robot`.
     pub fn for_robot(robot: Robot) -> ArmGains {
-        // Reference joint damping (docs/reference-facts.md §4.1): 0.1 everywhere on the iiwa, 0.01
-        // on the two wrist joints of the other arms.
+        // Reference joint damping (docs/src/reference-facts.md §4.1): 0.1 everywhere on the iiwa,
+        // 0.01 on the two wrist joints of the other arms.
         let damping = match robot {
             Robot::Iiwa => [0.1; 7],
             Robot::Jaco | Robot::Gen3 | Robot::Panda => [0.1, 0.1, 0.1, 0.1, 0.1, 0.01, 0.01],
         };
-        // Reference frictionloss (docs/reference-facts.md §4.1): robosuite's default 0.1, except
-        // the Jaco's own 0.01.
+        // Reference frictionloss (docs/src/reference-facts.md §4.1): robosuite's default 0.1,
+        // except the Jaco's own 0.01.
         let frictionloss = match robot {
             Robot::Jaco => 0.01,
             Robot::Iiwa | Robot::Gen3 | Robot::Panda => 0.1,
@@ -94,7 +94,7 @@ pub struct GripperParams {
     /// force saturates at `max_force` instead of depending on where the object stopped the pads.
     pub close_overshoot: f64,
     /// Dry friction of each finger joint (N): the reference's `frictionloss` 1
-    /// (docs/reference-facts.md §4.4).
+    /// (docs/src/reference-facts.md §4.4).
     pub frictionloss: f64,
 }
 

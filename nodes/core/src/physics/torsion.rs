@@ -1,6 +1,6 @@
 //! Torsional friction: the resistance of a contact to spinning about its own normal, which the
 //! reference gives the dumbbell and the plate (MuJoCo `condim="4"`, torsional coefficient 1 m on
-//! their geoms, docs/reference-facts.md §3) and rapier's contacts do not have.
+//! their geoms, docs/src/reference-facts.md §3) and rapier's contacts do not have.
 //!
 //! Each object contact (one manifold: one object primitive against one primitive of another
 //! collider) gets an impulse joint between the two bodies whose only effect is a velocity motor

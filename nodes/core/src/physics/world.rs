@@ -37,7 +37,7 @@ pub enum GripperCommand {
 }
 
 /// The pad gap at finger position `q_left` (fingers coupled, q_right = −q_left):
-/// 0.0371 m at q = 0 (docs/reference-facts.md §4.4).
+/// 0.0371 m at q = 0 (docs/src/reference-facts.md §4.4).
 pub fn pad_gap(q_left: f64) -> f64 {
     PAD_GAP_AT_ZERO + 2.0 * q_left
 }
@@ -57,7 +57,7 @@ pub enum ServoMode {
     /// limit: how a real arm's driver tracks absolute position commands.
     #[default]
     Stiff,
-    /// The reference benchmark's joint controller (docs/reference-facts.md §4.2), every physics
+    /// The reference benchmark's joint controller (docs/src/reference-facts.md §4.2), every physics
     /// step: torques
     /// τ = M(q)·(kp·e − kd·q̇) + bias with kp 50, kd 2√50 (critical damping), the full joint-space
     /// mass matrix M (armature included) and the gravity, Coriolis and centrifugal torques
@@ -84,8 +84,8 @@ pub struct FingerContacts {
 }
 
 impl FingerContacts {
-    /// The benchmark's grasp test (docs/reference-facts.md §6): both pads touch the object; for the
-    /// plate, one pad and any part of the other finger suffice.
+    /// The benchmark's grasp test (docs/src/reference-facts.md §6): both pads touch the object; for
+    /// the plate, one pad and any part of the other finger suffice.
     pub fn grasping(&self, object: Object) -> bool {
         match object {
             Object::Plate => {
@@ -834,7 +834,8 @@ impl SimWorld {
     }
 }
 
-/// The fully open finger position (m), where every episode starts (docs/reference-facts.md §4.4).
+/// The fully open finger position (m), where every episode starts
+/// (docs/src/reference-facts.md §4.4).
 pub const FINGER_OPEN: f64 = 0.020833;
 
 fn coordinate_axis(kind: JointKind) -> usize {

@@ -1,10 +1,10 @@
 //! Staged rewards, success and early termination of the four objectives, as the reference
-//! implements them (docs/reference-facts.md §6, including every place where its code differs from
-//! the paper).
+//! implements them (docs/src/reference-facts.md §6, including every place where its code differs
+//! from the paper).
 //!
 //! Each objective is one file computing its stages from a [`WorldSnapshot`]; this module holds
 //! what they share. The reward of a step is 1 on success, else the *maximum* over the stage
-//! values (not their sum, docs/reference-facts.md §1); every stage's maximum is below 1, so the
+//! values (not their sum, docs/src/reference-facts.md §1); every stage's maximum is below 1, so the
 //! reward is 1 exactly on success. Scene constants (bin 2, trash can, shelf, goal marker) come from
 //! [`crate::arena`]; the constants here are the reward's own shaping gains and thresholds.
 
@@ -150,7 +150,7 @@ impl RewardConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Termination {
     /// Push: the object rose more than 10 cm above the table height
-    /// (docs/reference-facts.md §1, §6).
+    /// (docs/src/reference-facts.md §1, §6).
     ObjectLifted,
 }
 
@@ -163,7 +163,7 @@ impl Termination {
     }
 }
 
-/// The stages of an objective, in order (docs/reference-facts.md §6).
+/// The stages of an objective, in order (docs/src/reference-facts.md §6).
 pub fn stage_specs(objective: Objective) -> &'static [StageSpec] {
     match objective {
         Objective::PickPlace => &pick_place::STAGES,
@@ -188,7 +188,8 @@ pub fn staged_reward(
     }
 }
 
-/// Whether the episode ends early in this state. Only Push ends early (docs/reference-facts.md §1).
+/// Whether the episode ends early in this state. Only Push ends early
+/// (docs/src/reference-facts.md §1).
 pub fn termination(objective: Objective, snapshot: &WorldSnapshot) -> Option<Termination> {
     match objective {
         Objective::Push => push::termination(snapshot),
@@ -202,10 +203,10 @@ fn closeness(gain: f64, distance: f64) -> f64 {
 }
 
 /// The reach stage shared by every objective: 10 is the reference's gain
-/// (docs/reference-facts.md §6).
+/// (docs/src/reference-facts.md §6).
 const REACH_GAIN: f64 = 10.0;
 
-/// Grip site to object origin (m), the `d_reach` of docs/reference-facts.md §6.
+/// Grip site to object origin (m), the `d_reach` of docs/src/reference-facts.md §6.
 fn reach_distance(snapshot: &WorldSnapshot) -> f64 {
     nalgebra::distance(&snapshot.grip_site_position, &snapshot.object_position)
 }
@@ -217,7 +218,8 @@ fn xy_distance(p: &Point3<f64>, x: f64, y: f64) -> f64 {
     (dx * dx + dy * dy).sqrt()
 }
 
-/// `low < value < high`: the reference's "in region" tests are strict (docs/reference-facts.md §6).
+/// `low < value < high`: the reference's "in region" tests are strict
+/// (docs/src/reference-facts.md §6).
 fn strictly_between(value: f64, low: f64, high: f64) -> bool {
     low < value && value < high
 }

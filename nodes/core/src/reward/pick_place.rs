@@ -1,5 +1,5 @@
 //! PickPlace: carry the object into bin 2 and keep the gripper near it
-//! (docs/reference-facts.md §6, PickPlace).
+//! (docs/src/reference-facts.md §6, PickPlace).
 
 use super::{
     REACH_GAIN, StageSpec, StagedReward, WorldSnapshot, closeness, reach_distance,
@@ -8,7 +8,7 @@ use super::{
 use crate::arena::{BIN2_FLOOR_HALF, objective_arena};
 use crate::axes::Objective;
 
-// Stage maxima (docs/reference-facts.md §6).
+// Stage maxima (docs/src/reference-facts.md §6).
 const REACH: f64 = 0.2;
 const GRASP: f64 = 0.3;
 const LIFT: f64 = 0.5;
@@ -24,18 +24,19 @@ pub(super) const STAGES: [StageSpec; 5] = [
     StageSpec { name: "drop", max: DROP },
 ];
 
-/// "In the bin" means below bin-2 body z + 0.1, the top of its walls (docs/reference-facts.md §6:
-/// 0.8 < z < 0.9); the drop stage's height target is the same level.
+/// "In the bin" means below bin-2 body z + 0.1, the top of its walls
+/// (docs/src/reference-facts.md §6: 0.8 < z < 0.9); the drop stage's height target is the same
+/// level.
 const IN_BIN_HEIGHT: f64 = 0.1;
-/// Lift target above bin 2's body: z = 1.05 (docs/reference-facts.md §6).
+/// Lift target above bin 2's body: z = 1.05 (docs/src/reference-facts.md §6).
 const LIFT_HEIGHT: f64 = 0.25;
 /// Success also needs 1 − tanh(10·d_reach) > 0.35, i.e. d_reach < 0.0775 m
-/// (docs/reference-facts.md §6).
+/// (docs/src/reference-facts.md §6).
 const SUCCESS_MIN_CLOSENESS: f64 = 0.35;
 /// Hover starts once lift exceeds this (⇔ |1.05 − z| < 0.0511 while grasped)
-/// (docs/reference-facts.md §6).
+/// (docs/src/reference-facts.md §6).
 const HOVER_MIN_LIFT: f64 = 0.45;
-// Shaping gains (docs/reference-facts.md §6).
+// Shaping gains (docs/src/reference-facts.md §6).
 const LIFT_GAIN: f64 = 5.0;
 const HOVER_GAIN: f64 = 2.0;
 const DROP_GAIN: f64 = 5.0;

@@ -1,5 +1,5 @@
 //! Push: bring the object to the goal marker in bin 2 without lifting it
-//! (docs/reference-facts.md §6, Push).
+//! (docs/src/reference-facts.md §6, Push).
 //!
 //! As implemented, unlike the paper: success also needs the object low (z ≤ 0.9), and the
 //! approach stage uses the 3-D distance to the marker, whose z is 2 cm below a resting object
@@ -11,7 +11,7 @@ use super::{
 use crate::arena::{goal_position, objective_arena};
 use crate::axes::{Object, Objective};
 
-// Stage maxima (docs/reference-facts.md §6).
+// Stage maxima (docs/src/reference-facts.md §6).
 const REACH: f64 = 0.2;
 const GRASP: f64 = 0.3;
 const APPROACH: f64 = 0.7;
@@ -23,12 +23,13 @@ pub(super) const STAGES: [StageSpec; 3] = [
     StageSpec { name: "approach", max: APPROACH },
 ];
 
-/// Success: the object's xy within 3 cm of the marker's, inclusive (docs/reference-facts.md §6).
+/// Success: the object's xy within 3 cm of the marker's, inclusive
+/// (docs/src/reference-facts.md §6).
 const SUCCESS_XY_RADIUS: f64 = 0.03;
 /// Both success (≤) and termination (>) compare the object's height above bin 2's body, the
-/// "table height" 0.8, with 10 cm (docs/reference-facts.md §1, §6).
+/// "table height" 0.8, with 10 cm (docs/src/reference-facts.md §1, §6).
 const MAX_HEIGHT_ABOVE_TABLE: f64 = 0.1;
-/// Approach shaping gain (docs/reference-facts.md §6).
+/// Approach shaping gain (docs/src/reference-facts.md §6).
 const APPROACH_GAIN: f64 = 5.0;
 
 /// The table height the reference measures lifting from: bin 2's body z.

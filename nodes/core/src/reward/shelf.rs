@@ -1,4 +1,4 @@
-//! Shelf: put the object on the shelf board (docs/reference-facts.md §6, Shelf).
+//! Shelf: put the object on the shelf board (docs/src/reference-facts.md §6, Shelf).
 //!
 //! As implemented: success needs only the object inside the shelf box (no gripper test); the
 //! align and approach stages need the object in front of the shelf but no grasp.
@@ -11,7 +11,7 @@ use super::{
 use crate::arena::{SHELF, objective_arena};
 use crate::axes::Objective;
 
-// Stage maxima (docs/reference-facts.md §6).
+// Stage maxima (docs/src/reference-facts.md §6).
 const REACH: f64 = 0.2;
 const GRASP: f64 = 0.3;
 const LIFT: f64 = 0.5;
@@ -28,13 +28,13 @@ pub(super) const STAGES: [StageSpec; 5] = [
 ];
 
 /// The in-shelf box reaches this fraction of the shelf's full depth (2 · y_size) in front of
-/// the shelf body: 0.18 < y < 0.33 (docs/reference-facts.md §6).
+/// the shelf body: 0.18 < y < 0.33 (docs/src/reference-facts.md §6).
 const IN_SHELF_DEPTH_FRACTION: f64 = 0.75;
-/// Lift target above bin 2's body: z = 1.05 (docs/reference-facts.md §6).
+/// Lift target above bin 2's body: z = 1.05 (docs/src/reference-facts.md §6).
 const LIFT_HEIGHT: f64 = 0.25;
-/// Approach starts once align exceeds this (⇔ θ < 0.8047 rad) (docs/reference-facts.md §6).
+/// Approach starts once align exceeds this (⇔ θ < 0.8047 rad) (docs/src/reference-facts.md §6).
 const APPROACH_MIN_ALIGN: f64 = 0.6;
-// Shaping gains (docs/reference-facts.md §6); align uses 1 − tanh(θ), gain 1.
+// Shaping gains (docs/src/reference-facts.md §6); align uses 1 − tanh(θ), gain 1.
 const LIFT_GAIN: f64 = 5.0;
 const ALIGN_GAIN: f64 = 1.0;
 const APPROACH_GAIN: f64 = 5.0;
@@ -50,7 +50,7 @@ fn board_top() -> f64 {
     SHELF.z_offset + SHELF.position[2]
 }
 
-/// Inside the shelf: 0.18 < y < 0.33 and 0.945 < z < 1.095 (docs/reference-facts.md §6).
+/// Inside the shelf: 0.18 < y < 0.33 and 0.945 < z < 1.095 (docs/src/reference-facts.md §6).
 fn in_shelf(p: &Point3<f64>) -> bool {
     let y = SHELF.position[1];
     let depth = SHELF.y_size * 2.0 * IN_SHELF_DEPTH_FRACTION;
@@ -60,7 +60,7 @@ fn in_shelf(p: &Point3<f64>) -> bool {
 }
 
 /// At the opening's height, any y: 0.995 < z < 1.095; the lower bound keeps the shelf's
-/// thickness as a margin above the board (docs/reference-facts.md §6).
+/// thickness as a margin above the board (docs/src/reference-facts.md §6).
 fn in_front(p: &Point3<f64>) -> bool {
     within_width(p)
         && strictly_between(

@@ -1,5 +1,5 @@
 //! The staged rewards against the reference's subtask code (`composuite/tasks/*_subtask.py`,
-//! see `docs/reference-sources.md`): every threshold from
+//! see `docs/src/reference-sources.md`): every threshold from
 //! both sides, every gate, the maxima, and random snapshots for the invariants.
 
 use nalgebra::{Point3, Vector3};
@@ -56,7 +56,7 @@ fn tanh_closeness(gain: f64, d: f64) -> f64 {
 
 // ---------------------------------------------------------------- shared
 
-/// docs/reference-facts.md §6 and the StagedReward message: names and maxima per objective, all
+/// docs/src/reference-facts.md §6 and the StagedReward message: names and maxima per objective, all
 /// below 1.
 #[test]
 fn stage_names_and_maxima() {
@@ -125,8 +125,8 @@ fn current_stage_is_the_latest_maximum() {
     assert_eq!((won.total, won.current_stage()), (1.0, None));
 }
 
-/// docs/reference-facts.md §1: only Push ends early, on the object rising more than 10 cm above the
-/// table (z − 0.8 > 0.1); a resting box (0.85) ends the episode 5 cm up, a dumbbell 2.8 cm up.
+/// docs/src/reference-facts.md §1: only Push ends early, on the object rising more than 10 cm above
+/// the table (z − 0.8 > 0.1); a resting box (0.85) ends the episode 5 cm up, a dumbbell 2.8 cm up.
 #[test]
 fn only_push_terminates_on_lifting() {
     let at = |z: f64| snap([0.1, 0.0, z], FAR);
@@ -152,7 +152,7 @@ fn only_push_terminates_on_lifting() {
 
 // ---------------------------------------------------------------- PickPlace
 
-/// docs/reference-facts.md §6: success = object in bin 2 and 1 − tanh(10·d_reach) > 0.35,
+/// docs/src/reference-facts.md §6: success = object in bin 2 and 1 − tanh(10·d_reach) > 0.35,
 /// i.e. d < 0.0775.
 #[test]
 fn pick_place_success_needs_the_gripper_near() {
@@ -172,7 +172,7 @@ fn pick_place_success_needs_the_gripper_near() {
     }
 }
 
-/// docs/reference-facts.md §6: in_bin is |x − 0.1| < 0.2, |y − 0.18| < 0.175, 0.8 < z < 0.9,
+/// docs/src/reference-facts.md §6: in_bin is |x − 0.1| < 0.2, |y − 0.18| < 0.175, 0.8 < z < 0.9,
 /// all strict.
 #[test]
 fn pick_place_in_bin_is_strict() {
@@ -208,9 +208,9 @@ fn pick_place_in_bin_is_strict() {
     }
 }
 
-/// docs/reference-facts.md §6: lift only while grasping and not in bin, target z 1.05; hover once
-/// lift > 0.45 (|1.05 − z| < 0.0511), building on lift outside the bin's footprint and on 0.5 above
-/// it.
+/// docs/src/reference-facts.md §6: lift only while grasping and not in bin, target z 1.05; hover
+/// once lift > 0.45 (|1.05 − z| < 0.0511), building on lift outside the bin's footprint and on 0.5
+/// above it.
 #[test]
 fn pick_place_lift_and_hover() {
     let outside = |z: f64| held([0.1, -0.26, z]);
@@ -267,8 +267,8 @@ fn pick_place_lift_and_hover() {
     );
 }
 
-/// docs/reference-facts.md §6: drop while grasping above the bin, not gated on in-bin: 0.9 at or
-/// below z 0.9.
+/// docs/src/reference-facts.md §6: drop while grasping above the bin, not gated on in-bin: 0.9 at
+/// or below z 0.9.
 #[test]
 fn pick_place_drop() {
     // In the bin's volume but with the gripper 10 cm away: no success, drop at its maximum.
@@ -300,7 +300,7 @@ fn pick_place_drop() {
 
 // ---------------------------------------------------------------- Push
 
-/// docs/reference-facts.md §6: success = xy within 0.03 of the marker (inclusive) and
+/// docs/src/reference-facts.md §6: success = xy within 0.03 of the marker (inclusive) and
 /// z ≤ 0.9 (inclusive).
 #[test]
 fn push_success() {
@@ -332,8 +332,8 @@ fn push_success() {
     );
 }
 
-/// docs/reference-facts.md §6: reach is never gated; grasp 0.3; approach only while grasping, on
-/// the 3-D distance to the marker (2 cm below a resting object, so it stays below 0.7 there).
+/// docs/src/reference-facts.md §6: reach is never gated; grasp 0.3; approach only while grasping,
+/// on the 3-D distance to the marker (2 cm below a resting object, so it stays below 0.7 there).
 #[test]
 fn push_stages() {
     let goal = goal_position(Objective::Push, Object::Box);
@@ -369,7 +369,7 @@ fn push_stages() {
 
 const CAN: [f64; 3] = [0.1, 0.18, 0.88];
 
-/// docs/reference-facts.md §6: in_can is |x − 0.1| < 0.08, |y − 0.18| < 0.08, 0.83 < z < 0.93
+/// docs/src/reference-facts.md §6: in_can is |x − 0.1| < 0.08, |y − 0.18| < 0.08, 0.83 < z < 0.93
 /// (strict); success = object in the can and grip site not in it.
 #[test]
 fn trash_can_success() {
@@ -417,7 +417,7 @@ fn trash_can_success() {
     assert_eq!((inside.total, inside.current_stage()), (0.0, None));
 }
 
-/// docs/reference-facts.md §6: reach and grasp gated on the object not in the can; lift target
+/// docs/src/reference-facts.md §6: reach and grasp gated on the object not in the can; lift target
 /// 1.11; hover gate lift > 0.45, building on 0.5 above the can and on lift elsewhere.
 #[test]
 fn trash_can_reach_grasp_lift_hover() {
@@ -452,8 +452,9 @@ fn trash_can_reach_grasp_lift_hover() {
     assert!(r.stages.iter().all(|s| s.value == 0.0));
 }
 
-/// docs/reference-facts.md §6 (a code-vs-paper difference): drop = 0.95 when the object is above
-/// the can, not in it, and the last gripper action is an open command (< 0) — no grasp needed.
+/// docs/src/reference-facts.md §6 (a code-vs-paper difference): drop = 0.95 when the object is
+/// above the can, not in it, and the last gripper action is an open command (< 0) — no grasp
+/// needed.
 #[test]
 fn trash_can_drop_is_keyed_on_the_gripper_action() {
     let over = |x: f64, action: f64, grasping: bool| {
@@ -491,7 +492,7 @@ fn trash_can_drop_is_keyed_on_the_gripper_action() {
 
 // ---------------------------------------------------------------- Shelf
 
-/// docs/reference-facts.md §6: in_shelf = |x − 0.1| < 0.2, 0.18 < y < 0.33, 0.945 < z < 1.095
+/// docs/src/reference-facts.md §6: in_shelf = |x − 0.1| < 0.2, 0.18 < y < 0.33, 0.945 < z < 1.095
 /// (strict), and it is the whole success test: the gripper may be anywhere.
 #[test]
 fn shelf_success() {
@@ -526,8 +527,8 @@ fn shelf_success() {
     assert!(!success_at(with(1, 0.33)), "the shelf body's y is outside");
 }
 
-/// docs/reference-facts.md §6: align = 0.5 + 0.3·(1 − tanh θ) in front of the shelf (|x − 0.1| <
-/// 0.2, 0.995 < z < 1.095, any y), with no grasp needed; θ between hand z and world +y.
+/// docs/src/reference-facts.md §6: align = 0.5 + 0.3·(1 − tanh θ) in front of the shelf (|x − 0.1|
+/// < 0.2, 0.995 < z < 1.095, any y), with no grasp needed; θ between hand z and world +y.
 #[test]
 fn shelf_align() {
     let pointing = |axis: Vector3<f64>, p: [f64; 3]| {
@@ -578,8 +579,8 @@ fn shelf_align() {
     }
 }
 
-/// docs/reference-facts.md §6: approach once in front and align > 0.6 (θ < 0.8047 rad), rising to
-/// 0.9 at y ≥ 0.23; lift target 1.05.
+/// docs/src/reference-facts.md §6: approach once in front and align > 0.6 (θ < 0.8047 rad), rising
+/// to 0.9 at y ≥ 0.23; lift target 1.05.
 #[test]
 fn shelf_approach_and_lift() {
     let threshold = (2.0f64 / 3.0).atanh();

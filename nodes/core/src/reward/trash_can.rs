@@ -1,5 +1,5 @@
 //! Trashcan: drop the object into the can and take the gripper out
-//! (docs/reference-facts.md §6, Trashcan).
+//! (docs/src/reference-facts.md §6, Trashcan).
 //!
 //! As implemented, unlike the paper: the drop stage is a constant keyed on the last gripper
 //! *action* being an open command, with no grasp test; success also needs the grip site
@@ -15,7 +15,7 @@ use super::{
 use crate::arena::TRASH_CAN;
 use crate::axes::Objective;
 
-// Stage maxima (docs/reference-facts.md §6).
+// Stage maxima (docs/src/reference-facts.md §6).
 const REACH: f64 = 0.2;
 const GRASP: f64 = 0.3;
 const LIFT: f64 = 0.5;
@@ -32,18 +32,18 @@ pub(super) const STAGES: [StageSpec; 5] = [
 ];
 
 /// Height of the in-can box above the can's floor top
-/// (docs/reference-facts.md §6: 0.83 < z < 0.93).
+/// (docs/src/reference-facts.md §6: 0.83 < z < 0.93).
 const IN_CAN_HEIGHT: f64 = 0.1;
 /// Lift target above the top of the can's walls: z = 0.825 + 0.005 + 0.08 + 0.2 = 1.11
-/// (docs/reference-facts.md §6).
+/// (docs/src/reference-facts.md §6).
 const LIFT_CLEARANCE: f64 = 0.2;
-/// Hover starts once lift exceeds this (docs/reference-facts.md §6).
+/// Hover starts once lift exceeds this (docs/src/reference-facts.md §6).
 const HOVER_MIN_LIFT: f64 = 0.45;
-// Shaping gains (docs/reference-facts.md §6).
+// Shaping gains (docs/src/reference-facts.md §6).
 const LIFT_GAIN: f64 = 5.0;
 const HOVER_GAIN: f64 = 2.0;
 
-/// Within the can's footprint, at any height (strict, docs/reference-facts.md §6).
+/// Within the can's footprint, at any height (strict, docs/src/reference-facts.md §6).
 fn above_can(p: &Point3<f64>) -> bool {
     let [x, y, _] = TRASH_CAN.position;
     let h = TRASH_CAN.half_size;

@@ -15,7 +15,7 @@ fn assert_bits(got: &[f64], want: &[f64]) {
     assert_eq!(got_bits, want_bits, "got {got:?}, want {want:?}");
 }
 
-/// docs/reference-facts.md §7.2 check values.
+/// docs/src/reference-facts.md §7.2 check values.
 #[test]
 fn python_seed_matches_cpython() {
     let mut mt = Mt19937::python_seed(42);
@@ -208,7 +208,7 @@ fn standard_normal_matches_numpy_legacy_gauss() {
 
 /// numpy 2.4.6: `np.random.seed(3); v = [np.random.standard_normal() for _ in range(7)]`, then
 /// `np.random.uniform(-0.03, 0.03)` — the reference's per-reset pattern
-/// (docs/reference-facts.md §7.3): 7 normals (an odd count, so one value stays cached)
+/// (docs/src/reference-facts.md §7.3): 7 normals (an odd count, so one value stays cached)
 /// followed by a uniform.
 #[test]
 fn seven_normals_then_a_uniform_as_at_reset() {

@@ -26,7 +26,7 @@ fn reference_tasks_are_indexed_by_reference_task_id() {
     for (k, task) in tasks.iter().enumerate() {
         assert_eq!(task.reference_task_id(), k);
     }
-    // docs/reference-facts.md §7.2 step 3: objective fastest, then obstacle, object, robot, in
+    // docs/src/reference-facts.md §7.2 step 3: objective fastest, then obstacle, object, robot, in
     // reference order.
     assert_eq!(
         names(&tasks[..6]),
@@ -134,9 +134,9 @@ fn no_shuffle_keeps_the_reference_order() {
     }
 }
 
-/// Pinned splits. Computed with CPython 3.11.7 running the docs/reference-facts.md §7.2 algorithm
-/// as written in `tests/py/test_splits_reference.py` (`reference_split(...)`, names mapped to wire
-/// names).
+/// Pinned splits. Computed with CPython 3.11.7 running the docs/src/reference-facts.md §7.2
+/// algorithm as written in `tests/py/test_splits_reference.py` (`reference_split(...)`, names
+/// mapped to wire names).
 #[test]
 fn pinned_splits_match_cpython() {
     let s = split(Experiment::Default, 5, None, 42);

@@ -5,7 +5,7 @@ use composuite_core::kinematics::{IkTarget, frame_from_axes, solve_ik};
 use composuite_core::physics::{ARM_DOF, GRIP_SITE_LINK, SimWorld};
 use nalgebra::{UnitQuaternion, Vector3};
 
-/// The pads' centre is 6.6 mm above the grip site (docs/reference-facts.md §4.4: the pads span
+/// The pads' centre is 6.6 mm above the grip site (docs/src/reference-facts.md §4.4: the pads span
 /// 0.0859..0.1189 from the gripper mount, the grip site is at 0.109).
 pub const PAD_CENTRE_ABOVE_GRIP_SITE: f64 = 0.109 - (0.0859 + 0.1189) / 2.0;
 

@@ -1,7 +1,7 @@
 //! `metadata.yaml`: what a rosbag2 directory says about itself — rosbag2 bagfile information
-//! version 9, the layout ROS 2 Jazzy writes (keys in yaml-cpp's order, docs/rosbag2-format.md §1).
-//! The same text without the top-level wrapper is stored in each MCAP file's `rosbag2` metadata
-//! record.
+//! version 9, the layout ROS 2 Jazzy writes (keys in yaml-cpp's order,
+//! docs/src/rosbag2-format.md §1). The same text without the top-level wrapper is stored in each
+//! MCAP file's `rosbag2` metadata record.
 
 use std::collections::BTreeMap;
 use std::fmt::Write;

@@ -1,6 +1,7 @@
 //! The QoS profiles a bag stores per topic: what the publishers offered, in rosbag2's
 //! metadata version 9 form (policy names as strings, durations as `{sec, nsec}`), used both in
-//! `metadata.yaml` and in each MCAP channel's `offered_qos_profiles` (docs/rosbag2-format.md §1.3).
+//! `metadata.yaml` and in each MCAP channel's `offered_qos_profiles`
+//! (docs/src/rosbag2-format.md §1.3).
 
 use std::fmt::Write;
 

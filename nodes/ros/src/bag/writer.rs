@@ -2,7 +2,7 @@
 //! `<dir name>_<N>.mcap` (profile `ros2`, `ros2msg` schemas, `cdr` messages, zstd chunks with
 //! message indexes, summary and CRCs) and `metadata.yaml` at close. Every schema and channel goes
 //! into the data section when its topic is added, so a topic without messages still passes
-//! `mcap doctor` (docs/rosbag2-format.md §6).
+//! `mcap doctor` (docs/src/rosbag2-format.md §6).
 
 use std::collections::BTreeMap;
 use std::fs::File;

@@ -1,5 +1,6 @@
 //! Topic and service names, relative (no leading `/`) so a launch can put each environment
-//! in its own namespace (`/env_00/joint_states`, ...). DESIGN.md's interface table.
+//! in its own namespace (`/env_00/joint_states`, ...). The node table in docs/src/node-suite.md
+//! lists them per node.
 
 /// Arm and finger joint states (sensor_msgs/JointState), sim → agents.
 pub const JOINT_STATES: &str = "joint_states";

@@ -6,7 +6,7 @@
 //!   period (as a simulator's ros2_control plugin steps its world);
 //! - [`MockHardware`]: follows its position commands exactly, as ros2_control's
 //!   `mock_components/GenericSystem` does, so the controllers run and are tested without physics;
-//! - a real arm's driver would be a third implementation (see the README's "Real cell").
+//! - a real arm's driver would be a third implementation (docs/src/controllers.md, "Real cell").
 //!
 //! Interfaces, as ros2_control names them: `<joint>/position` and `<joint>/velocity` state
 //! interfaces and a `<joint>/position` command interface for the seven arm joints and for the
