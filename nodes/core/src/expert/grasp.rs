@@ -61,10 +61,9 @@ const HOLLOW_BOX_PAD_Z: f64 = 0.035;
 /// How far above its centre (m) the pads take the box where walls pass under the wrist
 /// ([`walls_under_the_wrist`]): the pads (3.3 cm long) stay within the box's 6 cm height and the
 /// wrist and forearm ride 1 cm higher. Pushed past the goal wall, the Jaco's forearm otherwise
-/// runs 1.9 cm into the wall's free end on every lane (0/10). All 64 box tasks × 10 seeds with
-/// the box taken 1 cm higher everywhere: goal-wall pushes 2.9 → 4.0 of 4, Gen3 door shelf
-/// 0.2 → 0.9, Panda wall shelf 0.6 → 0.7; into the shelf past the goal wall IIWA 0.8 → 0.4,
-/// Gen3 1.0 → 0.5 (hence not there); no-obstacle tasks unchanged.
+/// runs 1.9 cm into the wall's free end on every lane. Only there: into the shelf past the goal
+/// wall the higher grasp does worse (docs/src/expert.md, "How the expert's settings were
+/// chosen").
 const BOX_RAISED_GRASP: f64 = 0.01;
 
 /// Where the pads go and how they get there.

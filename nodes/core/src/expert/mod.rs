@@ -2,8 +2,8 @@
 //!
 //! The expert reads only what an agent can see — the observation (object pose, joint angles)
 //! and the scene description ([`Env::goal`], [`Env::task`], the tables in [`crate::arena`]) —
-//! and acts only with [`Action::Absolute`] joint targets plus a gripper opening. Gripper poses
-//! are turned into joint targets with the crate's own damped-least-squares IK
+//! and acts only with [`crate::env::Action::Absolute`] joint targets plus a gripper opening.
+//! Gripper poses are turned into joint targets with the crate's own damped-least-squares IK
 //! ([`crate::kinematics::solve_ik`]) on the arm's kinematic model, seeded from the previous
 //! solution so consecutive targets stay on one IK branch.
 //!
@@ -28,7 +28,7 @@
 //! into bin 2 / slide to the goal / over the trash can / into the shelf) → release → retreat
 //! → hold.
 //!
-//! Grasps ([`grasp`]): the box from the top; the hollow box from the top by one wall (the
+//! Grasps (`grasp.rs`): the box from the top; the hollow box from the top by one wall (the
 //! near one, else the far one); the plate by its rim and the dumbbell by its bar, both from
 //! the side, pointing towards bin 2 (+y) where the arm reaches that way without touching the
 //! arena, else turned towards +x. Obstacles are passed over (object wall,
@@ -55,7 +55,7 @@
 //! dumbbell's upper disc).
 //!
 //! From behind the object wall and the door the plate and the dumbbell are pushed without a
-//! grasp ([`nudge`]): no side grasp keeps the low wrist off the wall (checked pose by pose),
+//! grasp (`nudge.rs`): no side grasp keeps the low wrist off the wall (checked pose by pose),
 //! while a gripper pointing down keeps wrist and forearm above the pads. Its two fingers, held
 //! 4 cm apart behind the object, push it along the floor in legs of 5 cm, each aimed again
 //! from where the object is then; the object rolls back between the fingers when pushed

@@ -69,10 +69,10 @@ pub(super) fn pad_ik(
     }
 }
 
-/// How close (m) to the arena the arm may come before [`pad_ik_clear`] swings it away. With
-/// the swing, all 256 tasks × 10 seeds: 0.904 → 0.914 (plate past the goal wall on the IIWA
-/// 0.1 → 0.4, the Jaco's dumbbell into the shelf past it 0.2 → 0.7; the Gen3's dumbbell into the
-/// shelf from behind the door 0.8 → 0.3, its slide in ends 4 cm shallower).
+/// How close (m) to the arena the arm may come before [`pad_ik_clear`] swings it away. The swing
+/// moves the joints by at most [`SWING_STEP`] per control step, so it starts while a link is
+/// still a few cm off: the steps add up before the link gets there. Its measured effect:
+/// docs/src/expert.md, "How the expert's settings were chosen".
 const SWING_MARGIN: f64 = 0.03;
 /// The largest joint change (rad) of one swing step.
 const SWING_STEP: f64 = 0.02;

@@ -132,9 +132,8 @@ fn heading(object: Point3<f64>, goal: Point2<f64>) -> Option<Vector3<f64>> {
 /// Leans of the gripper from pointing straight down (rad), tried both ways: about the push's
 /// direction with the wrist away from the robot (+x), which lifts the forearm over the
 /// door's posts (the Panda's); and, for the plate, about the fingers' closing axis with the
-/// wrist ahead of the pads. The dumbbell is pushed upright: leaning ahead, the fingers meet
-/// its upper disc before the lower one and tip it over (Jaco and Gen3 dumbbell wall and door
-/// pushes 0.65 → 0 over 10 seeds; the plate's 0.80 → 0.96).
+/// wrist ahead of the pads, which the plate's pushes gain from. The dumbbell is pushed
+/// upright: leaning ahead, the fingers meet its upper disc before the lower one and tip it over.
 const LEANS: [f64; 3] = [0.0, 0.3, 0.55];
 
 /// The grip site's orientations for pushing `object` along `u` (unit, horizontal): pointing

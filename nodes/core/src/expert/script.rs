@@ -33,9 +33,10 @@ const MAX_JOINT_STEP: f64 = 0.05;
 /// A move through joint space (no straight line to follow) may run each joint at up to this
 /// fraction of its rated speed at the peak, where that is faster than [`MAX_JOINT_STEP`]: the
 /// Panda's joints (2.2–2.6 rad/s) and the IIWA's outer ones; the Gen3's and the Jaco's stay at
-/// [`MAX_JOINT_STEP`]. The Panda's plate behind the door, whose approach turns the wrist 5 rad
-/// through joint space (8 s at 1 rad/s): pick_place, trash_can and shelf 0.6 → 1.5 of 3 over 10
-/// seeds; all 64 Panda tasks 54.8 → 55.6 (plate open pick_place 1.0 → 0.9), the IIWA's 64 + 0.1.
+/// [`MAX_JOINT_STEP`]. Some approaches turn the wrist through several radians (the Panda's
+/// plate behind the door: 5 rad, 8 s at 1 rad/s), which at 1 rad/s leaves too little of the
+/// episode for the grasp and the carry; the arms whose joints are rated faster follow this much
+/// of it. The measured effect: docs/src/expert.md, "How the expert's settings were chosen".
 const JOINT_MOVE_SPEED_FRACTION: f64 = 0.7;
 /// What a plan that ends short of one of its poses counts as lost clearance (m): any plan that
 /// reaches its poses is preferred.
@@ -49,9 +50,7 @@ const PUSH_LIFT_CHECK: f64 = 0.03;
 /// they end further from counts as unreached. The Gen3's dumbbell grasps pointing +y from
 /// behind the object wall end 5–6 cm short (at the edge of its reach) with a clear path, land a
 /// finger on the dumbbell's disc and fail on every seed. Only the grasp counts: the IIWA's
-/// rise from its start pose ends up to 30 cm short and the next segments recover. Dumbbell
-/// 64 × 10: 50.5 → 51.7 (Gen3 behind the wall: pick_place and trash_can 0.6 → 1.0, shelf
-/// 0 → 0.4), no task down.
+/// rise from its start pose ends up to 30 cm short and the next segments recover.
 const GRASP_MISS: f64 = 0.03;
 /// What a grasp that cannot be lifted straight counts as lost clearance (m): less than an
 /// unreached one.
@@ -68,9 +67,8 @@ const REGRASP_PACE: f64 = 0.6;
 /// How far below its resting height (m) the gripper lowers a set-down object before letting
 /// go: the plate tilts in a rim grasp while carried (0.4 rad) and, let go just above the
 /// floor, stays tilted on its stem's edge where no rim grasp takes it again; pressed down,
-/// the floor turns it level first (the dumbbell likewise). Summed success rate of the 16
-/// side-grasp Pushes past the object wall and goal wall, 5 seeds: let go 0.5 cm above rest
-/// 2.0, pressed 2 cm 6.8, 2.5 cm 7.4, 3 cm 7.0, 4.5 cm 6.4.
+/// the floor turns it level first (the dumbbell likewise). 2.5 cm did best of the depths tried
+/// (docs/src/expert.md, "How the expert's settings were chosen").
 const SET_DOWN_PRESS: f64 = 0.025;
 /// Grasps tried again after one that did not lift the object.
 const MAX_RETRIES: usize = 2;
@@ -89,9 +87,8 @@ const PUSH_LIFT: f64 = 0.012;
 const PUSH_SIDE_CARRY_Z: f64 = 0.885;
 /// How far above its resting height (m) the dumbbell is carried while pushing with a side
 /// grasp: just off the floor. Carried up at [`PUSH_SIDE_CARRY_Z`] (1.7 cm), it tilts in the
-/// grasp and its origin crosses the 0.9 m line that ends the episode (the Jaco's goal-wall push:
-/// 0/10). 16 dumbbell pushes × 10 seeds: 11.6 → 12.3 (Jaco goal wall 0 → 0.5, IIWA 0.4 → 0.6).
-/// The plate does worse this low (plate pushes 12.6 → 10.5: its rim drags on the floor).
+/// grasp and its origin crosses the 0.9 m line that ends the episode. Only the dumbbell: the
+/// plate's rim drags on the floor this low.
 const DUMBBELL_PUSH_LIFT: f64 = 0.01;
 /// Inner face of bin 2's far wall (x, m; docs/src/reference-facts.md §2.1).
 const BIN2_FAR_WALL_X: f64 = 0.29;
@@ -124,9 +121,9 @@ const SHELF_NEAR_END_CLEAR: f64 = 0.04;
 /// success band's x −0.1 bound, with the gripper's housing still outside the end.
 const SHELF_NEAR_END_DEPTH: f64 = 0.06;
 /// How far (m) the arm may run into the arena on the best way through the shelf's front before
-/// the ways through its near end are tried. Goal-wall shelf tasks, 10 seeds, where the best
-/// front way ran in by 4.5–8 cm (IIWA box and dumbbell, Jaco box and 2 dumbbell seeds) the near
-/// end succeeded 29 of 40 times, the front 2; by 0.8–4 cm the front did better.
+/// the ways through its near end are tried: where the clearance model has the arm run in by
+/// more than this, the front way mostly fails and the near end mostly works; by less, the front
+/// does better (docs/src/expert.md, "How the expert's settings were chosen").
 const SHELF_FRONT_MISS: f64 = -0.04;
 /// Clearance (m) below which a top-grasped object's other ways into the shelf are tried.
 const SHELF_TOP_OTHERS_BELOW: f64 = -0.06;
@@ -165,10 +162,10 @@ const BIN2_SIDE_SPOTS: [[f64; 2]; 5] = [
     [0.2, 0.28],
 ];
 /// How much closer to the arena (m) a side-grasped carry to the shelf counts when some segment
-/// of it leaves its straight line (a joint-space swing, which can fling a rim-held plate):
-/// plate and dumbbell shelf tasks, 10 seeds, 22.2 → 23.3 of 32 (Panda plate behind the wall
-/// 0.2 → 0.8), none down; counted as a whole [`UNLIFTABLE`] instead, the IIWA's plate and
-/// dumbbell door insertions, whose clear options all swing, fell from 0.8 and 0.5 to 0.
+/// of it leaves its straight line (a joint-space swing, which can fling a rim-held plate): a
+/// small penalty, so a straight carry wins over a swinging one that is about as clear. Not a
+/// whole [`UNLIFTABLE`]: that would rule out the IIWA's plate and dumbbell insertions from
+/// behind the door, whose clear options all swing and which succeed with them.
 const SHELF_SWING_PENALTY: f64 = 0.02;
 /// Turns of a side-grasped object's gripper about the vertical (rad) on its way into bin 2,
 /// tried in this order with each spot of [`BIN2_SIDE_SPOTS`].
@@ -184,9 +181,9 @@ const OVER_TRASH_CAN_Z: f64 = 1.01;
 
 /// Where the dumbbell is let go over the trash can, relative to the can's centre (x, y; m).
 /// Released over the centre it tips away from the opening fingers (+x, +y) and often comes
-/// to rest leaning on the can's rim, its origin above the 0.93 m in-can line; from here it
-/// lands inside (with the fingers slid out level before rising, 16 dumbbell trash-can tasks ×
-/// 10 seeds: 0.67 → 0.81).
+/// to rest leaning on the can's rim, its origin above the 0.93 m in-can line; let go from here,
+/// towards the robot and bin 1, it lands inside (with the fingers slid out level before
+/// rising).
 const DUMBBELL_DROP_OFFSET: [f64; 2] = [-0.02, -0.02];
 
 /// The phases of the script, in order.
@@ -206,7 +203,7 @@ pub enum Phase {
     Transport,
     /// The objective's placing motion (lower into the bin; slide to the goal; over the can).
     Place,
-    /// Pushing the object to the goal without a grasp (see [`super::nudge`]).
+    /// Pushing the object to the goal without a grasp (see `expert/nudge.rs`).
     Nudge,
     /// Opening the fingers.
     Release,
@@ -349,9 +346,9 @@ impl Expert {
 
     /// Whether the object is pushed without a grasp ([`super::nudge`]): the plate and the
     /// dumbbell from behind the object wall or the door, where no side grasp keeps the low
-    /// wrist off the wall (see the note on issue 5); round the goal wall only by the Panda,
-    /// whose two-grasp plan does not fit in the episode (plate and dumbbell 0 → 0.1 over 10
-    /// seeds; the other arms do better with two grasps: 0.37 against 0.17).
+    /// wrist off the wall (`reach.rs` checks that pose by pose); round the goal wall only by the
+    /// Panda, whose two-grasp plan does not fit in the episode (the other arms do better with
+    /// two grasps there).
     fn nudges(&self) -> bool {
         let task = self.task;
         let side_grasped = matches!(task.object, Object::Plate | Object::Dumbbell);
@@ -735,7 +732,7 @@ impl Expert {
                         };
                         // The first option unless the arm would run well into the arena
                         // along it: the model's near misses mostly work, and the other
-                        // options then did worse (Jaco/box/object_wall 1 → 0 over 3 seeds).
+                        // options then do worse.
                         // Past the goal wall, the first lane that keeps clear.
                         let front = |e: &mut Self| {
                             let start = e.mark();
@@ -935,8 +932,8 @@ impl Expert {
     /// Plans the way into the shelf through its front that `front` plans (returning its gap to
     /// the arena), unless, past the goal wall, the arm then runs into the arena by more than
     /// [`SHELF_FRONT_MISS`]: then the way through the near end that `near_end` plans, where its
-    /// gap is larger. (Behind the object wall and the door the near end did worse: the Panda's
-    /// box and hollow box, 2.7 → 1.7 of 3 over 10 seeds.)
+    /// gap is larger. (Only past the goal wall: behind the object wall and the door the near end
+    /// does worse.)
     fn shelf_way(&mut self, front: impl Fn(&mut Self) -> f64, near_end: impl Fn(&mut Self) -> f64) {
         let start = self.mark();
         let gap = front(self);
@@ -1335,8 +1332,8 @@ impl Expert {
         let q0 = self.q.expect("planned from a known pose");
         let mut n = steps(seconds);
         // Pushing without a grasp, the fingers' way is the plan: no swinging the arm off the
-        // arena (round the goal wall the Panda's object slipped out at the turn: 0.1 → 0 on 2
-        // tasks).
+        // arena (a swing at the turn round the goal wall lets the object slip out from between
+        // the fingers).
         let nudging = self.nudges();
         let (mut line, mut all_met, mut end_met);
         loop {
@@ -1382,10 +1379,10 @@ impl Expert {
             }
         }
         // A segment that ends short of its pose (no IK solution met it) marks the plan. Used
-        // for the plate: there it steers the choice of rim grasps and bin spots to ones the
-        // arm reaches (plate 0.35 → 0.58 over 64 tasks × 2 seeds); for the dumbbell's grasps it
-        // rejects approaches that do work (the slide in ends within a few cm); and for pushes
-        // without a grasp, whose fingers must get down behind the object.
+        // for the plate, where it steers the choice of rim grasps and bin spots to ones the arm
+        // reaches, and for pushes without a grasp, whose fingers must get down behind the
+        // object. Not for the dumbbell's grasps: there it would reject approaches that work
+        // (the slide in ends within a few cm).
         self.missed |= !end_met && (self.task.object == Object::Plate || self.nudges());
         for joints in line {
             self.plan.push_back(Action::Absolute {

@@ -71,8 +71,9 @@ impl ArmGains {
         };
         ArmGains {
             kp: [4000.0, 4000.0, 3000.0, 3000.0, 1500.0, 1000.0, 1000.0],
-            // Joint 1 carries the largest armature (5 kg·m²) and turns the whole arm: with 400
-            // the Gen3's torque-limited joint 1 overshot a 0.3 rad step by 10.9 %.
+            // Joint 1 carries the largest armature (5 kg·m²) and turns the whole arm: it needs
+            // more damping than joint 2 for the Gen3's torque-limited joint 1 to settle a step
+            // without overshoot (nodes/core/tests/arms.rs; the figures: docs/src/physics.md).
             kd: [550.0, 400.0, 300.0, 300.0, 120.0, 80.0, 80.0],
             armature: [5.0, 2.5, 5.0 / 3.0, 1.25, 1.0, 5.0 / 6.0, 5.0 / 7.0],
             damping,
