@@ -81,8 +81,35 @@ fn constant_rust_type(base: &BaseType) -> String {
 
 fn doc_attrs(out: &mut String, indent: &str, lines: &[String]) {
     for line in lines {
+        let line = plain_text(line);
         writeln!(out, "{indent}#[doc = {:?}]", format!(" {line}")).unwrap();
     }
+}
+
+/// A `.msg` comment line as rustdoc Markdown that shows it as written: outside `code spans`,
+/// brackets and angle brackets are escaped, so `[0, 1]` is not a link, `"<joint>/<interface>"`
+/// not an HTML tag and a leading `> 0 closes` not a block quote.
+fn plain_text(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    for (i, part) in line.split('`').enumerate() {
+        if i > 0 {
+            out.push('`');
+        }
+        if i % 2 == 1 {
+            out.push_str(part);
+            continue;
+        }
+        for c in part.chars() {
+            match c {
+                '[' => out.push_str("\\["),
+                ']' => out.push_str("\\]"),
+                '<' => out.push_str("&lt;"),
+                '>' => out.push_str("&gt;"),
+                _ => out.push(c),
+            }
+        }
+    }
+    out
 }
 
 fn element_description(base: &BaseType) -> String {
@@ -385,4 +412,21 @@ pub fn generate(registry: &Registry) -> String {
     }
     out.push_str("}\n");
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::plain_text;
+
+    #[test]
+    fn comments_are_shown_as_written() {
+        assert_eq!(plain_text("in [0, 1]"), "in \\[0, 1\\]");
+        assert_eq!(
+            plain_text("\"<joint>/<interface>\""),
+            "\"&lt;joint&gt;/&lt;interface&gt;\""
+        );
+        assert_eq!(plain_text("> 0 closes"), "&gt; 0 closes");
+        assert_eq!(plain_text("`a[i] <b>` and [c]"), "`a[i] <b>` and \\[c\\]");
+        assert_eq!(plain_text("plain"), "plain");
+    }
 }

@@ -63,6 +63,8 @@ enum BagCommand {
     },
     /// Write chosen topics (all by default) to one file per topic in --out: JSON lines
     /// ({"log_time", "publish_time", "message"}) or CSV (the message flattened: a.b, a[i]).
+    // This doc comment is also the subcommand's --help text, where `a[i]` is literal.
+    #[allow(rustdoc::broken_intra_doc_links)]
     Export {
         /// The bag directory.
         bag: PathBuf,

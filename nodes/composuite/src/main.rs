@@ -1,6 +1,9 @@
-//! `composuite`: the user-facing command of CompoSuite-ROS. Subcommands grow with the suite;
-//! today it lists the 256 tasks and their reference splits, times whole tasks, runs the scripted
-//! expert, and launches the ROS 2 node suite.
+//! `composuite`: the user-facing command of CompoSuite-ROS. It lists the 256 tasks and the
+//! reference's train/test splits (`tasks`), times whole tasks in process (`bench`), runs the
+//! scripted expert over tasks and seeds (`expert`), starts the ROS 2 node suite (`launch`; one
+//! node: `node`), drives the suite with a built-in policy (`demo`) or records that as a session
+//! (`session`), and reads, checks, exports and plays recorded bags (`bag`). Every subcommand, with
+//! an example: docs/src/getting-started.md.
 
 mod bag;
 mod bench;

@@ -49,6 +49,8 @@ pub struct SessionArgs {
     #[arg(long)]
     horizon: Option<u32>,
     /// Output directory (must not exist) [default: runs/session_<unix time>].
+    // This doc comment is also the option's --help text, where `<unix time>` is literal.
+    #[allow(rustdoc::invalid_html_tags)]
     #[arg(long)]
     out: Option<PathBuf>,
     /// Print the per-episode table as JSON instead of the summary.

@@ -1,4 +1,7 @@
-//! The ROS-free core of CompoSuite-ROS.
+//! The ROS-free core of CompoSuite-ROS: the 256 tasks, their arenas, observations and staged
+//! rewards, the four arms and the gripper in rapier3d, the in-process environment
+//! ([`env::Env`]) and the scripted [`expert`]. Whatever steps a task — the tests, the benchmarks,
+//! the ROS 2 nodes, the `composuite` command — steps it through this crate.
 //!
 //! A CompoSuite task is one element from each of four axes — robot, object, obstacle,
 //! objective — giving 4 × 4 × 4 × 4 = 256 tasks. Each axis is its own module under [`axes`],
