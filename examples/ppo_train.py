@@ -13,13 +13,12 @@ script runs anywhere Gymnasium does, without a deep-learning framework.
 
 Usage
 
-    # CompoSuite-ROS: start the suite, then train against it (default task, one env at "/")
-    composuite launch --envs 1 &
-    python examples/ppo_train.py --epochs 100 --log ppo.csv --save ppo.npz
+    # CompoSuite in-process (the default): the native vector env, one thread per core
+    python examples/ppo_train.py --num-envs 2 --epochs 100 --log ppo.csv --save ppo.npz
 
-    # four environments /env_00 ... /env_03, another task
+    # over ROS 2: start the suite, then train against it (four environments /env_00 ... /env_03)
     composuite launch --envs 4 --task Jaco/dumbbell/object_door/shelf &
-    python examples/ppo_train.py --num-envs 4 --task Jaco/dumbbell/object_door/shelf
+    python examples/ppo_train.py --backend ros --num-envs 4 --task Jaco/dumbbell/object_door/shelf
 
     # any Gymnasium environment with Box observations and actions (no ROS needed)
     python examples/ppo_train.py --gym-id Pendulum-v1 --num-envs 2 --epochs 20
@@ -470,6 +469,10 @@ def make_env(args):
         return gymnasium.make_vec(
             args.gym_id, num_envs=args.num_envs, vectorization_mode="sync",
             wrappers=[lambda env: TimeLimit(env, max_episode_steps=args.max_ep_len)])
+    if args.backend == "native":
+        from composuite_ros.native import CompoSuiteNativeVectorEnv
+
+        return CompoSuiteNativeVectorEnv([args.task] * args.num_envs)
     from composuite_ros.vector import CompoSuiteRosVectorEnv
 
     return CompoSuiteRosVectorEnv(namespaces=args.namespaces, tasks=[args.task] * args.num_envs)
@@ -585,8 +588,9 @@ def _append_csv(path: str, row: dict) -> None:
 # ----------------------------------------------------------------------------------------------
 
 EXAMPLES = """examples:
+  python %(prog)s --num-envs 2 --log ppo.csv --save ppo.npz       # in-process
   composuite launch --envs 4 &        # the CompoSuite-ROS suite, envs /env_00 ... /env_03
-  python %(prog)s --num-envs 4 --log ppo.csv --save ppo.npz
+  python %(prog)s --backend ros --num-envs 4 --log ppo.csv --save ppo.npz
   python %(prog)s --gym-id Pendulum-v1 --num-envs 2 --epochs 20
   python %(prog)s --check-gradients"""
 
@@ -611,15 +615,20 @@ def parse_args(argv=None):
                           "CompoSuite-ROS; built with gymnasium.make_vec(..., 'sync')")
     env.add_argument("--task", default="IIWA/box/no_obstacle/pick_place",
                      help="CompoSuite task robot/object/obstacle/objective, for every env")
+    env.add_argument("--backend", choices=["native", "ros"], default=None,
+                     help="native: CompoSuite in-process (composuite_ros.native, the default); ros: "
+                          "the running suite's environments over ROS 2 (the default when "
+                          "--namespaces are given)")
     env.add_argument("--namespaces", default=None,
-                     help="comma-separated ROS namespaces of the running suite's envs; default "
+                     help="--backend ros: comma-separated ROS namespaces of the running suite's envs; default "
                           "'/' for one env, '/env_00,...' for N (what `composuite launch "
                           "--envs N` uses)")
     env.add_argument("--num-envs", type=int, default=None,
                      help="parallel envs (default: the number of --namespaces, else 1)")
     env.add_argument("--max-ep-len", type=int, default=500,
                      help="episode length cap for --gym-id envs (their own limit still applies "
-                          "if shorter); CompoSuite-ROS episodes end at the suite's horizon")
+                          "if shorter); CompoSuite episodes end at the horizon (500; over ROS the "
+                          "suite's)")
 
     ppo = p.add_argument_group("PPO")
     ppo.add_argument("--seed", type=int, default=42,
@@ -665,6 +674,10 @@ def parse_args(argv=None):
                           "(status 1 if a relative error is >= 1e-4)")
     args = p.parse_args(argv)
 
+    if args.backend is None:
+        args.backend = "ros" if args.namespaces is not None else "native"
+    if args.backend == "native" and args.namespaces is not None:
+        p.error("--namespaces name the suite's environments: use them with --backend ros")
     if args.namespaces is not None:
         args.namespaces = [ns.strip() for ns in args.namespaces.split(",") if ns.strip()]
         if args.num_envs is None:

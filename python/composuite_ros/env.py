@@ -30,27 +30,14 @@ from typing import Any
 
 import gymnasium
 import numpy as np
-from gymnasium import spaces
 
+from . import episode
 from ._link import ARM_JOINTS, Channel, ObservationView, Participant, normalize_namespace
+from .episode import (ACTION_MODES, ACTION_SIZE, OBS_SIZE_WITH_TASK, OBS_SIZE_WITHOUT_TASK,  # noqa: F401
+                      TASK_ID_SLICE, EpisodeSeeds, absolute_action_space, check_action,
+                      check_action_mode, observation_space, reference_action_space)
 from .errors import EpisodeOverError
 from .tasks import Task
-
-# The flat observation's layout (composuite_msgs/Observation): the task one-hots sit at 45..60.
-OBS_SIZE_WITH_TASK = 93
-OBS_SIZE_WITHOUT_TASK = 77
-TASK_ID_SLICE = slice(45, 61)
-ACTION_SIZE = 8
-ACTION_MODES = ("reference", "absolute")
-
-
-def observation_space(use_task_id_obs: bool) -> spaces.Box:
-    size = OBS_SIZE_WITH_TASK if use_task_id_obs else OBS_SIZE_WITHOUT_TASK
-    return spaces.Box(-np.inf, np.inf, shape=(size,), dtype=np.float64)
-
-
-def reference_action_space() -> spaces.Box:
-    return spaces.Box(-1.0, 1.0, shape=(ACTION_SIZE,), dtype=np.float32)
 
 
 def _view(message) -> ObservationView:
@@ -68,59 +55,16 @@ def flat_observation(message, use_task_id_obs: bool) -> np.ndarray:
     return flat.copy()
 
 
-def check_action_mode(action_mode: str) -> None:
-    if action_mode not in ACTION_MODES:
-        raise ValueError(f"action_mode {action_mode!r} is not one of {', '.join(ACTION_MODES)}")
-
-
-class EpisodeSeeds:
-    """The seeds of an environment's episodes: a given seed, else the next draw of a generator
-    seeded by the last given one (fresh entropy if none was given), as Gymnasium seeds an env's
-    `np_random`. Retrying a reset with the same seed gives the same start."""
-
-    def __init__(self):
-        self._rng: np.random.Generator | None = None
-
-    def next(self, seed: int | None) -> int:
-        if seed is not None:
-            if not 0 <= int(seed) < 2**64:
-                raise ValueError(f"seed {seed} is outside 0..2**64-1")
-            self._rng = np.random.default_rng(int(seed))
-            return int(seed)
-        if self._rng is None:
-            self._rng = np.random.default_rng()
-        return int(self._rng.integers(0, 2**31))
-
-
-class EpisodeTracker:
-    """What an episode has shown so far: return, success, furthest stage."""
-
-    def __init__(self, start_stamp_ns: int):
-        self.start_stamp_ns = start_stamp_ns
-        self.episode_return = 0.0
-        self.success = False
-        self.furthest_stage = -1
-        self.done = False
+class EpisodeTracker(episode.EpisodeTracker):
+    """An episode's tracker fed by the suite's messages."""
 
     def step_info(self, messages) -> dict[str, Any]:
-        """The step's info: deterministic (same seed and actions, same info), so no episode
-        counter or absolute clock, which go on across episodes."""
         reward, status = messages.reward, messages.status
-        self.episode_return += reward.total
-        self.success = self.success or bool(reward.success)
-        self.furthest_stage = max(self.furthest_stage, reward.current_stage)
-        self.done = bool(status.done or status.terminated or status.truncated)
-        names = list(reward.stage_names)
-        return {
-            "stages": dict(zip(names, (float(v) for v in reward.stage_values))),
-            "current_stage": names[reward.current_stage] if reward.current_stage >= 0 else "",
-            "furthest_stage": names[self.furthest_stage] if self.furthest_stage >= 0 else "",
-            "success": bool(reward.success),
-            "episode_success": self.success,
-            "step": int(status.step),
-            "sim_time": (stamp_ns(messages.observation) - self.start_stamp_ns) * 1e-9,
-            "reason": status.reason_text,
-        }
+        return self.record(
+            stage_names=list(reward.stage_names), stage_values=reward.stage_values,
+            current_stage=reward.current_stage, reward=reward.total, success=reward.success,
+            step=status.step, sim_time=(stamp_ns(messages.observation) - self.start_stamp_ns) * 1e-9,
+            reason=status.reason_text, done=bool(status.done or status.terminated or status.truncated))
 
 
 def stamp_ns(message) -> int:
@@ -242,25 +186,12 @@ class CompoSuiteRosEnv(gymnasium.Env):
     def _use_robot_limits(self, robot: str) -> None:
         limits = self._channel.joint_limits(robot)
         self._joint_names = [name for name, _, _ in limits]
-        self.action_space = spaces.Box(np.array([lo for _, lo, _ in limits]),
-                                       np.array([hi for _, _, hi in limits]), dtype=np.float64)
+        self.action_space = absolute_action_space(limits)
 
     def _send(self, action) -> None:
         values = np.asarray(action, dtype=np.float64).reshape(-1)
-        if values.shape != (ACTION_SIZE,):
-            raise ValueError(f"action has {values.size} values; this env takes {ACTION_SIZE} "
-                             f"({'7 joint deltas and the gripper, each in [-1, 1]' if self.action_mode == 'reference' else '7 joint targets (rad) and the left finger target (m)'})")
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"action has non-finite values: {values.tolist()}")
+        check_action(values, self.action_mode)
         if self.action_mode == "reference":
             self._channel.send_reference_action(values)
         else:
             self._channel.send_joint_targets(self._joint_names, values[:ARM_JOINTS + 1])
-
-
-def register_envs() -> None:
-    """Register `composuite_ros/CompoSuite-v0` with Gymnasium (done on `import composuite_ros`)."""
-    if "composuite_ros/CompoSuite-v0" not in gymnasium.registry:
-        gymnasium.register(id="composuite_ros/CompoSuite-v0",
-                           entry_point="composuite_ros.env:CompoSuiteRosEnv",
-                           disable_env_checker=False)

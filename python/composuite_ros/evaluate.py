@@ -1,14 +1,21 @@
-"""The CompoSuite paper's evaluation protocol over running environments of the suite.
+"""The CompoSuite paper's evaluation protocol, in-process or over running environments of the suite.
+
+    composuite-eval --experiment smallscale --element IIWA --num-train 16 --episodes 5 \\
+        --agent random --out runs/eval_iiwa                       # in-process (--backend native)
 
     composuite launch --envs 2 &
     composuite-eval --experiment smallscale --element IIWA --num-train 16 --episodes 5 \\
-        --agent random --namespaces /env_00,/env_01 --out runs/eval_iiwa
+        --agent random --namespaces /env_00,/env_01 --out runs/eval_iiwa    # over ROS 2
 
-1. The train/test split comes from the suite's `sample_tasks` service, which draws it exactly as
-   the reference's `composuite.sample_tasks` (same experiment, num_train, element and shuffling
-   seed → the same lists as the paper's experiments).
+1. The train/test split is drawn exactly as the reference's `composuite.sample_tasks` (same
+   experiment, num_train, element and shuffling seed → the same lists as the paper's
+   experiments): in-process by the simulation core, over ROS by the suite's `sample_tasks`
+   service, which runs the same code.
 2. Every chosen task runs `--episodes` episodes (episode j of every task has seed `--seed` + j),
-   spread over the environments, which step concurrently.
+   spread over the environments, which step concurrently: `--envs` in-process environments on
+   the cores (`--backend native`, the default when no `--namespaces` are given), or the suite's
+   environments in `--namespaces` (`--backend ros`). For the same agent, split and seeds both
+   give the same episodes, bit for bit (only where each ran, `namespace` and `episode`, differ).
 3. The paper's metrics: per task the mean return R̄ (sum of the step rewards of an episode,
    averaged over its episodes) and the success rate S̄ (an episode succeeds if any step has
    reward 1); then averaged over the train and over the test tasks, and per axis element.
@@ -36,10 +43,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ._link import Channel, Participant
-from .env import EpisodeTracker, flat_observation, stamp_ns
+from . import episode as _episode
 from .errors import SuiteNotRunningError
 from .tasks import AXES, Task
+
+# The ROS side (rclpy, composuite_msgs) is imported by the ROS backend only, so the in-process
+# evaluation runs where no ROS is installed.
+
+BACKENDS = ("native", "ros")
 
 EXPERIMENTS = ("default", "smallscale", "holdout")
 
@@ -173,16 +184,18 @@ class _Job:
 
 
 class _Worker:
-    """One environment running jobs one episode at a time."""
+    """One environment of the suite running jobs one episode at a time."""
 
-    def __init__(self, channel: Channel, agent, use_task_id_obs: bool):
+    def __init__(self, channel, agent, use_task_id_obs: bool):
         self.channel, self.agent, self.use_task_id_obs = channel, agent, use_task_id_obs
         self.task: str | None = None
         self.job: _Job | None = None
-        self.tracker: EpisodeTracker | None = None
+        self.tracker = None
         self.length = 0
 
     def start(self, job: _Job) -> None:
+        from .env import EpisodeTracker, stamp_ns
+
         if job.task != self.task:
             self.task = str(self.channel.set_task(Task.parse(job.task)))
         reply = self.channel.reset(job.seed)
@@ -193,11 +206,9 @@ class _Worker:
         self._act(reply.observation)
 
     def _act(self, observation) -> None:
-        action = np.asarray(self.agent.act(flat_observation(observation, self.use_task_id_obs)),
-                            dtype=np.float64).reshape(-1)
-        if action.shape != (8,) or not np.all(np.isfinite(action)):
-            raise ValueError(f"the agent returned {action.tolist()}; it must give 8 finite values")
-        self.channel.send_reference_action(action)
+        from .env import flat_observation
+        self.channel.send_reference_action(
+            agent_action(self.agent, flat_observation(observation, self.use_task_id_obs)))
 
     def advance(self) -> EpisodeResult | None:
         """Take the arrived step; the finished episode's result, or None (next action sent)."""
@@ -213,10 +224,95 @@ class _Worker:
                              info["furthest_stage"])
 
 
+def agent_action(agent, observation: np.ndarray) -> np.ndarray:
+    """The agent's action for `observation`, checked: 8 finite values."""
+    action = np.asarray(agent.act(observation), dtype=np.float64).reshape(-1)
+    if action.shape != (8,) or not np.all(np.isfinite(action)):
+        raise ValueError(f"the agent returned {action.tolist()}; it must give 8 finite values")
+    return action
+
+
+def in_job_order(jobs: Sequence[_Job], results: list[EpisodeResult]) -> list[EpisodeResult]:
+    order = {(j.split, j.task, j.seed): i for i, j in enumerate(jobs)}
+    return sorted(results, key=lambda r: order[(r.split, r.task, r.seed)])
+
+
+def run_episodes_native(jobs: Sequence[_Job], envs: int | None = None, agent_spec: str = "random", *,
+                        use_task_id_obs: bool = True, horizon: int = 500, threads: int | None = None,
+                        progress: bool = True) -> list[EpisodeResult]:
+    """Run every job (task, seed) as one episode on `envs` in-process environments (default:
+    one per core) stepped together; results in job order. An environment's `namespace` is
+    `native/<index>`."""
+    from . import _native
+    from .native import default_threads
+    make_agent = agent_factory(agent_spec)
+    n = max(1, min(envs or default_threads(len(jobs)), len(jobs)))
+    batch = _native.Batch([jobs[i].task for i in range(n)], threads=threads or default_threads(n),
+                          horizon=horizon, use_task_id_obs=use_task_id_obs)
+    period_ns = batch.control_period_ns
+    lifted, at_horizon = _native.end_reasons(horizon)
+    agents = [make_agent() for _ in range(n)]
+    tasks = batch.tasks()
+    stage_names = [list(batch.stage_names(i)) for i in range(n)]
+    running: list[_Job | None] = [None] * n
+    trackers: list[_episode.EpisodeTracker | None] = [None] * n
+    modes, seeds, actions, observations = batch.modes, batch.seeds, batch.actions, batch.observations
+    queue = list(jobs)
+    queue.reverse()
+    results: list[EpisodeResult] = []
+    bar = Progress(len(jobs), progress)
+    steps = successes = 0
+    bar.update(0, 0, 0)
+    while queue or any(running):
+        modes[:] = _native.MODE_IDLE
+        starting = []
+        for i in range(n):
+            if running[i] is not None or not queue:
+                continue
+            starting.append(i)
+            job = running[i] = queue.pop()
+            if job.task != tasks[i]:
+                tasks[i] = batch.set_task(i, job.task)
+                stage_names[i] = list(batch.stage_names(i))
+            modes[i], seeds[i] = _native.MODE_RESET, job.seed
+            trackers[i] = _episode.EpisodeTracker()
+        if starting:
+            batch.run()
+            for i in starting:
+                if callable(getattr(agents[i], "reset", None)):
+                    agents[i].reset(running[i].task, running[i].seed)
+        active = [i for i in range(n) if running[i] is not None]
+        for i in active:
+            actions[i] = agent_action(agents[i], observations[i].copy())
+            modes[i] = _native.MODE_STEP
+        batch.run()
+        for i in active:
+            terminated, truncated = bool(batch.terminated[i]), bool(batch.truncated[i])
+            names = stage_names[i]
+            length = int(batch.steps[i])
+            info = trackers[i].record(
+                stage_names=names, stage_values=batch.stage_values[i, :len(names)],
+                current_stage=batch.current_stage[i], reward=batch.rewards[i],
+                success=batch.success[i], step=length, sim_time=(length * period_ns) * 1e-9,
+                reason=lifted if terminated else at_horizon if truncated else "",
+                done=terminated or truncated)
+            steps += 1
+            if trackers[i].done:
+                job, running[i] = running[i], None
+                results.append(EpisodeResult(job.split, job.task, job.seed, f"native/{i}", batch.episode(i),
+                                             length, trackers[i].episode_return, trackers[i].success,
+                                             info["furthest_stage"]))
+                successes += results[-1].success
+                bar.update(len(results), steps, successes)
+    return in_job_order(jobs, results)
+
+
 def run_episodes(jobs: Sequence[_Job], namespaces: Sequence[str], agent_spec: str = "random", *,
                  use_task_id_obs: bool = True, domain_id: int | None = None, timeout: float = 10.0,
                  progress: bool = True) -> list[EpisodeResult]:
-    """Run every job (task, seed) as one episode over the environments; results in job order."""
+    """Run every job (task, seed) as one episode over the suite's environments in `namespaces`;
+    results in job order."""
+    from ._link import Channel, Participant
     make_agent = agent_factory(agent_spec)
     participant = Participant("composuite_eval", domain_id)
     results: list[EpisodeResult] = []
@@ -253,37 +349,61 @@ def run_episodes(jobs: Sequence[_Job], namespaces: Sequence[str], agent_spec: st
                 raise stuck.channel.step_lost_error()
     finally:
         participant.close()
-    order = {(j.split, j.task, j.seed): i for i, j in enumerate(jobs)}
-    return sorted(results, key=lambda r: order[(r.split, r.task, r.seed)])
+    return in_job_order(jobs, results)
 
 
-def evaluate(namespaces: Sequence[str], *, experiment: str = "default", num_train: int = 0,
-             element: str = "", split_seed: int = 0, splits: Sequence[str] = ("train", "test"),
-             max_tasks: int | None = None, episodes: int = 1, seed: int = 0, agent: str = "random",
-             use_task_id_obs: bool = True, domain_id: int | None = None, timeout: float = 10.0,
+def evaluate(namespaces: Sequence[str] | None = None, *, backend: str | None = None,
+             experiment: str = "default", num_train: int = 0, element: str = "", split_seed: int = 0,
+             splits: Sequence[str] = ("train", "test"), max_tasks: int | None = None, episodes: int = 1,
+             seed: int = 0, agent: str = "random", use_task_id_obs: bool = True, envs: int | None = None,
+             horizon: int = 500, domain_id: int | None = None, timeout: float = 10.0,
              progress: bool = True) -> tuple[dict[str, list[str]], list[EpisodeResult], list[Metric]]:
-    """The protocol as a function: (the split's task lists, every episode, the metrics)."""
+    """The protocol as a function: (the split's task lists, every episode, the metrics).
+
+    `backend`: "native" (in-process, `envs` environments, episodes of at most `horizon` steps)
+    or "ros" (the suite's environments in `namespaces`, with the suite's horizon); by default
+    "ros" when `namespaces` are given, else "native"."""
+    backend = backend or ("ros" if namespaces else "native")
+    if backend not in BACKENDS:
+        raise ValueError(f"backend {backend!r} is not one of {', '.join(BACKENDS)}")
+    if backend == "ros" and not namespaces:
+        raise ValueError("the ros backend needs the namespaces of the suite's environments")
+    if backend == "native" and namespaces:
+        raise ValueError("the native backend runs its own environments: give no namespaces "
+                         "(or choose the ros backend)")
     if experiment not in EXPERIMENTS:
         raise ValueError(f"experiment {experiment!r} is not one of {', '.join(EXPERIMENTS)}")
     if episodes < 1:
         raise ValueError("episodes must be at least 1")
+    if horizon < 1:
+        raise ValueError("horizon must be at least 1")
     agent_factory(agent)  # a bad agent fails now, not after the split was drawn
     unknown = set(splits) - {"train", "test"}
     if unknown or not splits:
         raise ValueError(f"splits {list(splits)}: choose from train, test")
-    lists = sample_split(namespaces[0], experiment, num_train, element, split_seed, domain_id, timeout)
+    if backend == "native":
+        from . import _native
+        train, test = _native.sample_tasks(experiment, num_train, element, split_seed)
+        lists = {"train": train, "test": test}
+    else:
+        lists = sample_split(namespaces[0], experiment, num_train, element, split_seed, domain_id, timeout)
     chosen = {name: lists[name][:max_tasks] if max_tasks else lists[name] for name in splits}
     jobs = [_Job(name, task, seed + j) for name in splits for task in chosen[name] for j in range(episodes)]
     if not jobs:
         raise ValueError(f"the {experiment} split with num_train {num_train} has no {' or '.join(splits)} tasks")
-    results = run_episodes(jobs, namespaces, agent, use_task_id_obs=use_task_id_obs, domain_id=domain_id,
-                           timeout=timeout, progress=progress)
+    if backend == "native":
+        results = run_episodes_native(jobs, envs, agent, use_task_id_obs=use_task_id_obs, horizon=horizon,
+                                      progress=progress)
+    else:
+        results = run_episodes(jobs, namespaces, agent, use_task_id_obs=use_task_id_obs, domain_id=domain_id,
+                               timeout=timeout, progress=progress)
     return lists, results, metrics(results)
 
 
 def sample_split(namespace: str, experiment: str, num_train: int, element: str, seed: int,
                  domain_id: int | None = None, timeout: float = 10.0) -> dict[str, list[str]]:
     """The reference's train/test lists, from the suite's `sample_tasks` service."""
+    from ._link import Channel, Participant
     participant = Participant("composuite_eval_split", domain_id)
     try:
         channel = Channel(participant, namespace, timeout)
@@ -388,9 +508,16 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--episodes", type=int, default=1, help="episodes per task (episode j: seed --seed + j)")
     p.add_argument("--seed", type=int, default=0, help="seed of each task's first episode")
     p.add_argument("--agent", default="random", help="random, zero, or module:Class with act(observation)")
-    p.add_argument("--namespaces", default="/",
-                   help="comma-separated namespaces of the environments (composuite launch --envs N: "
-                        "/env_00,/env_01,...)")
+    p.add_argument("--backend", choices=BACKENDS, default=None,
+                   help="native: in-process environments (the default without --namespaces); ros: the "
+                        "running suite's environments in --namespaces")
+    p.add_argument("--namespaces", default=None,
+                   help="comma-separated namespaces of the suite's environments (composuite launch "
+                        "--envs N: /env_00,/env_01,...; a plain composuite launch: /); implies --backend ros")
+    p.add_argument("--envs", type=int, default=None,
+                   help="native: environments stepped together (default: one per core)")
+    p.add_argument("--horizon", type=int, default=500,
+                   help="native: episode length limit in steps (over ROS the suite's --horizon holds)")
     p.add_argument("--no-task-id-obs", action="store_true", help="77-value observations (no task one-hots)")
     p.add_argument("--timeout", type=float, default=10.0, help="seconds any wait may take")
     p.add_argument("--out", type=Path, default=None, help="output folder (default runs/eval_<unix time>)")
@@ -400,12 +527,18 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
-    namespaces = [ns for ns in args.namespaces.split(",") if ns]
+    namespaces = [ns for ns in args.namespaces.split(",") if ns] if args.namespaces is not None else []
+    backend = args.backend or ("ros" if args.namespaces is not None else "native")
+    if backend == "ros" and not namespaces:
+        namespaces = ["/"]
+    if args.envs is not None and args.envs < 1:
+        print("composuite-eval: --envs must be at least 1", file=sys.stderr)
+        return 2
     splits = [s for s in args.splits.split(",") if s]
     out = args.out or Path("runs") / f"eval_{int(time.time())}"
     try:
         lists, results, rows = evaluate(
-            namespaces, experiment=args.experiment, num_train=args.num_train, element=args.element,
+            namespaces, backend=backend, envs=args.envs, horizon=args.horizon, experiment=args.experiment, num_train=args.num_train, element=args.element,
             split_seed=args.split_seed, splits=splits, max_tasks=args.max_tasks, episodes=args.episodes,
             seed=args.seed, agent=args.agent, use_task_id_obs=not args.no_task_id_obs,
             timeout=args.timeout, progress=not args.quiet)

@@ -9,6 +9,7 @@ import csv
 import json
 import subprocess
 import sys
+from dataclasses import asdict
 
 import numpy as np
 import pytest
@@ -45,6 +46,21 @@ def composuite_tasks(*args: str) -> list[str]:
     out = subprocess.run([str(node_dir() / "composuite"), "tasks", *args, "--json"],
                          capture_output=True, text=True, check=True).stdout
     return out
+
+
+def test_native_and_ros_backends_give_the_same_table(suite):
+    """One policy, two paths: the same agent, split and seeds in-process and over the suite give
+    the same episodes and metrics, bit for bit (only where each episode ran differs)."""
+    config = dict(experiment="smallscale", element="Jaco", num_train=3, split_seed=4, max_tasks=2,
+                  episodes=2, seed=10, progress=False)
+    ros_lists, ros_results, ros_rows = evaluate.evaluate(NAMESPACES, **config)
+    lists, results, rows = evaluate.evaluate(backend="native", envs=3, horizon=HORIZON, **config)
+    assert lists == ros_lists
+    where = ("namespace", "episode")
+    assert [{k: v for k, v in asdict(r).items() if k not in where} for r in results] == \
+        [{k: v for k, v in asdict(r).items() if k not in where} for r in ros_results]
+    assert {r.namespace for r in results} == {"native/0", "native/1", "native/2"}
+    assert rows == ros_rows
 
 
 def test_eval_metrics_equal_the_bag_and_the_in_process_env(suite, tmp_path):
@@ -111,6 +127,23 @@ def test_eval_with_a_user_agent_class(tmp_path):
     assert eval_agents.ClosingGripper.resets == [(t, s) for t in lists["train"] for s in (3, 4)]
     assert all(r.length == 5 for r in results)
     assert rows[0].split == "train" and rows[0].tasks == 2 and rows[0].episodes == 4
+
+
+def test_native_eval_needs_no_suite(tmp_path):
+    out = tmp_path / "native"
+    result = composuite_eval("--experiment", "default", "--num-train", "2", "--split-seed", "1",
+                             "--splits", "train", "--episodes", "2", "--horizon", "8", "--envs", "2",
+                             "--quiet", "--out", str(out))
+    summary = json.loads((out / "summary.json").read_text())
+    reference = json.loads(composuite_tasks("--split", "default", "--num-train", "2", "--seed", "1"))
+    assert summary["tasks"]["train"] == reference["train"]
+    assert [(e["task"], e["seed"], e["length"]) for e in summary["episodes"]] == \
+        [(t, s, 8) for t in reference["train"] for s in (0, 1)]
+    assert summary["config"]["backend"] is None and "(all)" in result.stdout
+    bad = composuite_eval("--envs", "0", check=False)
+    assert bad.returncode == 2 and "--envs must be at least 1" in bad.stderr
+    both = composuite_eval("--backend", "native", "--namespaces", "/a", check=False)
+    assert both.returncode == 2 and "native backend runs its own environments" in both.stderr
 
 
 def test_eval_errors_are_clear(tmp_path):

@@ -29,6 +29,9 @@ const UPPER_MASK: u32 = 0x8000_0000;
 /// The 31 least significant bits of a word.
 const LOWER_MASK: u32 = 0x7fff_ffff;
 
+/// Words of state (numpy's `get_state()` key length).
+pub const MT_STATE_WORDS: usize = N;
+
 /// A 32-bit Mersenne Twister with the draws of CPython's `random` and numpy's legacy
 /// `np.random`, bit-identical to both.
 ///
@@ -139,6 +142,23 @@ impl Mt19937 {
     /// different streams. Also clears the cached normal, as numpy's seeding does.
     pub fn numpy_seed(n: u32) -> Self {
         Self::init_genrand(n)
+    }
+
+    /// The generator in the state numpy's legacy `np.random.get_state()` describes:
+    /// `('MT19937', key, pos, has_gauss, cached_gaussian)` — the 624 words, the position of
+    /// the next word (624: regenerate first) and the cached normal, if any. `None` when `pos`
+    /// is past 624.
+    pub fn from_numpy_state(key: [u32; N], pos: usize, gauss: Option<f64>) -> Option<Self> {
+        (pos <= N).then_some(Mt19937 {
+            state: key,
+            index: pos,
+            gauss,
+        })
+    }
+
+    /// The state as numpy's `np.random.set_state()` takes it: (key, pos, cached normal).
+    pub fn numpy_state(&self) -> ([u32; N], usize, Option<f64>) {
+        (self.state, self.index, self.gauss)
     }
 
     /// The reference `genrand_int32`: the next tempered 32-bit output, regenerating all `N`

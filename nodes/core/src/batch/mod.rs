@@ -23,6 +23,7 @@ use std::fmt;
 use crate::TaskSpec;
 use crate::env::{Action, Env, EnvConfig, EnvError};
 use crate::obs::{FLAT_SIZE_WITH_TASK, FLAT_SIZE_WITHOUT_TASK};
+use crate::rng::Mt19937;
 
 #[cfg(test)]
 mod test;
@@ -278,6 +279,25 @@ impl EnvBatch {
         self.envs[index] = Env::new(task, config);
     }
 
+    /// Reset environment `index` alone, with the reference's draws taken from `rng` as it
+    /// stands ([`Env::reset_from`]), and write its row of `out`.
+    pub fn reset_from(
+        &mut self,
+        index: usize,
+        rng: &mut Mt19937,
+        out: &mut BatchOutput<'_>,
+    ) -> Result<(), BatchError> {
+        self.check_output(out);
+        let observation = self.envs[index]
+            .reset_from(rng)
+            .map_err(|error| BatchError { index, error })?;
+        let row = &mut self.rows[index];
+        *row = Row::default();
+        write_observation(&mut row.observation, &observation.flat());
+        self.write_rows(&[index], out);
+        Ok(())
+    }
+
     /// Carry out one command per environment, in parallel, and write each environment's row of
     /// `out`. Every command is checked first: if one would be refused, nothing is stepped and
     /// the error names the environment.
@@ -314,11 +334,22 @@ impl EnvBatch {
                 .map(work)
                 .collect(),
         };
+        let written: Vec<usize> = (0..n)
+            .filter(|&i| !matches!(commands[i], BatchCommand::Idle))
+            .collect();
+        self.write_rows(&written, out);
+        // The prechecks cover every refusal `Env` can make, so this is a safety net: the
+        // error still names the environment rather than being lost.
+        match results.into_iter().enumerate().find(|(_, r)| r.is_err()) {
+            Some((index, Err(error))) => Err(BatchError { index, error }),
+            _ => Ok(()),
+        }
+    }
+
+    fn write_rows(&self, indices: &[usize], out: &mut BatchOutput<'_>) {
         let size = self.observation_size;
-        for (index, (row, command)) in self.rows.iter().zip(commands).enumerate() {
-            if matches!(command, BatchCommand::Idle) {
-                continue;
-            }
+        for &index in indices {
+            let row = &self.rows[index];
             out.observations[index * size..(index + 1) * size]
                 .copy_from_slice(&row.observation[..size]);
             out.rewards[index] = row.reward;
@@ -329,12 +360,6 @@ impl EnvBatch {
                 .copy_from_slice(&row.stage_values);
             out.current_stage[index] = row.current_stage;
             out.steps[index] = row.steps;
-        }
-        // The prechecks cover every refusal `Env` can make, so this is a safety net: the
-        // error still names the environment rather than being lost.
-        match results.into_iter().enumerate().find(|(_, r)| r.is_err()) {
-            Some((index, Err(error))) => Err(BatchError { index, error }),
-            _ => Ok(()),
         }
     }
 

@@ -199,3 +199,26 @@ fn bad_batches_are_refused() {
         Some(BatchBuildError::NoThreads)
     );
 }
+
+#[test]
+fn reset_from_a_generator_seeded_as_numpy_equals_reset_with_the_seed() {
+    let tasks = tasks();
+    let mut batch = EnvBatch::new(&tasks, EnvConfig::default(), 1).unwrap();
+    let mut seeded = BatchResults::new(&batch);
+    let resets: Vec<_> = (0..tasks.len()).map(|_| BatchCommand::Reset(17)).collect();
+    batch.run(&resets, &mut seeded.view()).unwrap();
+    let mut drawn = BatchResults::new(&batch);
+    for index in 0..tasks.len() {
+        let mut rng = Mt19937::numpy_seed(17);
+        batch
+            .reset_from(index, &mut rng, &mut drawn.view())
+            .unwrap();
+        assert_eq!(batch.env(index).seed(), crate::env::UNSEEDED);
+        // 7 normals take at least 4 accepted pairs (16 words) and leave the 8th cached; the
+        // object's x, y and the goal's two draws take 2 words each.
+        let (_, pos, gauss) = rng.numpy_state();
+        assert!(pos >= 16 + 4 + 4, "{pos}");
+        assert!(gauss.is_some());
+    }
+    assert_eq!(bits(&seeded.observations), bits(&drawn.observations));
+}

@@ -21,7 +21,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 
 pub use action::Action;
 pub use layout::EpisodeLayout;
-pub use reset::{MAX_SEED, sample_object_start};
+pub use reset::{MAX_SEED, UNSEEDED, draw_object_start, sample_object_start};
 pub use world_state::WorldState;
 
 use crate::TaskSpec;
@@ -33,6 +33,7 @@ use crate::physics::{ARM_DOF, FINGER_OPEN, PhysicsParams, ServoMode, SimWorld};
 use crate::reward::{
     RewardConfig, StagedReward, Termination, WorldSnapshot, staged_reward, termination,
 };
+use crate::rng::Mt19937;
 
 /// Settings of an environment; start from `EnvConfig::default()` and change fields with the
 /// builder methods.
@@ -244,6 +245,21 @@ impl Env {
     /// only on its seed and actions.
     pub fn reset(&mut self, seed: u64) -> Result<Observation, EnvError> {
         let start = sample_object_start(self.task.obstacle, self.task.object, seed)?;
+        Ok(self.start_episode(start, seed))
+    }
+
+    /// Start an episode with the reference's draws taken from `rng` as it stands (numpy's
+    /// global generator, which the reference's `reset()` draws from when no seed is set: the
+    /// reference's own API, `composuite_ros.compat`, passes its state through here). `rng` is
+    /// left where the reference leaves numpy's. The episode's [`Env::seed`] is
+    /// [`UNSEEDED`]: its start came from a generator state, not a seed.
+    pub fn reset_from(&mut self, rng: &mut Mt19937) -> Result<Observation, EnvError> {
+        let start = draw_object_start(self.task.obstacle, self.task.object, rng)
+            .ok_or(EnvError::NoClearStart { seed: UNSEEDED })?;
+        Ok(self.start_episode(start, UNSEEDED))
+    }
+
+    fn start_episode(&mut self, start: Point3<f64>, seed: u64) -> Observation {
         self.world = self.template.fresh_copy();
         self.world
             .place_object(&Isometry3::translation(start.x, start.y, start.z));
@@ -255,7 +271,7 @@ impl Env {
         self.last_gripper_action = 0.0;
         self.episode_return = 0.0;
         self.success_seen = false;
-        Ok(self.observation())
+        self.observation()
     }
 
     /// Advance one control period with `action`. Refused (nothing changes) after the episode

@@ -163,6 +163,12 @@ impl Termination {
     }
 }
 
+/// Why an episode that ran to its horizon of `horizon` control steps ended (the episode
+/// status's reason text, as the task manager sends it and the Python envs report it).
+pub fn horizon_reason(horizon: u32) -> String {
+    format!("the horizon of {horizon} steps was reached")
+}
+
 /// The stages of an objective, in order (docs/src/reference-facts.md §6).
 pub fn stage_specs(objective: Objective) -> &'static [StageSpec] {
     match objective {

@@ -363,7 +363,7 @@ impl TaskManager {
             ),
             (None, true) => (
                 msg::EpisodeStatus::REASON_HORIZON,
-                format!("the horizon of {} steps was reached", ep.horizon),
+                composuite_core::reward::horizon_reason(ep.horizon),
             ),
             (None, false) => (msg::EpisodeStatus::REASON_RUNNING, String::new()),
         };
