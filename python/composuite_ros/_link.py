@@ -1,7 +1,8 @@
 """The ROS side of the Gymnasium envs: one rclpy participant, and one `Channel` per environment
 of the suite (per namespace) with its topics, services and what arrived on them.
 
-Lessons this follows (rclpy 7.1.6 on Fast DDS; the README's "Gymnasium" section has the figures):
+Lessons this follows (rclpy 7.1.6 on Fast DDS; the book's Performance chapter,
+docs/src/performance.md, has the figures):
 - a private `Context` and an own `SingleThreadedExecutor` polled with `spin_once`: nothing spins
   in the background, so `close()` leaves no thread, and no `spin_until_future_complete` (it slows
   down with every service call in that release);

@@ -13,7 +13,7 @@
 A step publishes every environment's action first, then gathers every environment's step: the
 environments (separate sim processes, on this machine or others) work in parallel. One rclpy
 participant serves them all. Environments on other machines are just other namespaces on the
-same ROS_DOMAIN_ID: DDS discovery finds them (see the README, "Across machines").
+same ROS_DOMAIN_ID: DDS discovery finds them (docs/src/many-machines.md).
 
 Autoreset (Gymnasium's NEXT_STEP mode): when environment i ends an episode, the next `step()`
 ignores its action, resets it (the next seed of its own sequence) and returns the new episode's

@@ -188,7 +188,9 @@ impl Default for Row {
 /// Environments (each its own task) and the thread pool that steps them.
 pub struct EnvBatch {
     envs: Vec<Env>,
-    /// `None` with one thread: the caller's thread steps every environment itself.
+    /// The `threads − 1` helpers of the caller's thread, which steps environments too (`None`
+    /// with one thread). The caller works rather than waits: on a machine with as many cores
+    /// as threads, no core idles while a blocked caller and spinning workers share them.
     pool: Option<rayon::ThreadPool>,
     threads: usize,
     /// Scratch, one per environment, reused every call.
@@ -213,7 +215,7 @@ impl EnvBatch {
         let pool = if threads > 1 {
             Some(
                 rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
+                    .num_threads(threads - 1)
                     .thread_name(|i| format!("composuite-env-{i}"))
                     .build()
                     .map_err(|e| BatchBuildError::ThreadPool(e.to_string()))?,
@@ -315,23 +317,13 @@ impl EnvBatch {
         for (index, (env, command)) in self.envs.iter().zip(commands).enumerate() {
             precheck(env, command).map_err(|error| BatchError { index, error })?;
         }
-        let work = |(env, (row, command)): (&mut Env, (&mut Row, &BatchCommand))| {
-            carry_out(env, command, row)
-        };
         let results: Vec<Result<(), EnvError>> = match &self.pool {
-            Some(pool) => pool.install(|| {
-                use rayon::prelude::*;
-                self.envs
-                    .par_iter_mut()
-                    .zip(self.rows.par_iter_mut().zip(commands.par_iter()))
-                    .map(work)
-                    .collect()
-            }),
+            Some(pool) => step_shared(pool, self.threads, &mut self.envs, &mut self.rows, commands),
             None => self
                 .envs
                 .iter_mut()
-                .zip(self.rows.iter_mut().zip(commands.iter()))
-                .map(work)
+                .zip(self.rows.iter_mut().zip(commands))
+                .map(|(env, (row, command))| carry_out(env, command, row))
                 .collect(),
         };
         let written: Vec<usize> = (0..n)
@@ -378,6 +370,50 @@ impl EnvBatch {
         assert_eq!(out.current_stage.len(), n, "current_stage");
         assert_eq!(out.steps.len(), n, "steps");
     }
+}
+
+/// One environment's share of a parallel call: the environment, its row, how its command went.
+type Slot<'a> = (&'a mut Env, &'a mut Row, Result<(), EnvError>);
+
+/// Carry out `commands` with the caller's thread and `threads − 1` workers of `pool` taking
+/// environments one at a time from a shared counter, so a slow environment holds only the
+/// thread stepping it and the others take the rest.
+fn step_shared(
+    pool: &rayon::ThreadPool,
+    threads: usize,
+    envs: &mut [Env],
+    rows: &mut [Row],
+    commands: &[BatchCommand],
+) -> Vec<Result<(), EnvError>> {
+    use std::sync::Mutex;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let next = AtomicUsize::new(0);
+    // Each environment is taken by exactly one thread (the counter hands out each index once);
+    // the locks are never contended, they only make the hand-over safe.
+    let slots: Vec<Mutex<Slot<'_>>> = envs
+        .iter_mut()
+        .zip(rows.iter_mut())
+        .map(|(env, row)| Mutex::new((env, row, Ok(()))))
+        .collect();
+    let work = || {
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            let Some(slot) = slots.get(i) else { break };
+            let mut slot = slot.lock().expect("an environment's step panicked");
+            let (env, row, result) = &mut *slot;
+            *result = carry_out(env, &commands[i], row);
+        }
+    };
+    pool.in_place_scope(|scope| {
+        for _ in 1..threads {
+            scope.spawn(|_| work());
+        }
+        work();
+    });
+    slots
+        .into_iter()
+        .map(|slot| slot.into_inner().expect("an environment's step panicked").2)
+        .collect()
 }
 
 /// Whether `env` would refuse `command`: the same tests `Env` makes, made before any
