@@ -69,6 +69,20 @@ class EpisodeSeeds:
         return int(self._rng.integers(0, 2**31))
 
 
+def vector_seeds(seed, num_envs: int) -> list[int | None]:
+    """A vector env's `reset(seed=...)` as one seed (or None) per environment: an int s gives
+    environment i the seed s + i (as Gymnasium's own vector envs do), a list one per environment,
+    None the next seed of each environment's own sequence."""
+    if seed is None:
+        return [None] * num_envs
+    if isinstance(seed, (int, np.integer)):
+        return [int(seed) + i for i in range(num_envs)]
+    seeds = list(seed)
+    if len(seeds) != num_envs:
+        raise ValueError(f"{len(seeds)} seeds for {num_envs} environments")
+    return seeds
+
+
 class EpisodeTracker:
     """What an episode has shown so far: return, success, furthest stage."""
 

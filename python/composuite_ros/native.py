@@ -30,7 +30,8 @@ from gymnasium.vector.utils import batch_space
 
 from . import _native
 from .episode import (ACTION_SIZE, EpisodeSeeds, EpisodeTracker, absolute_action_space,
-                      check_action, check_action_mode, observation_space, reference_action_space)
+                      check_action, check_action_mode, observation_space, reference_action_space,
+                      vector_seeds)
 from .errors import EpisodeOverError
 from .tasks import Task
 
@@ -252,14 +253,7 @@ class CompoSuiteNativeVectorEnv(VectorEnv):
         """Reset every environment. `seed`: an int s gives environment i the seed s + i (as
         Gymnasium's own vector envs do), a list one seed per environment."""
         super().reset(seed=seed if isinstance(seed, int) else None)
-        if seed is None:
-            seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, (int, np.integer)):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} environments")
+        seeds = vector_seeds(seed, self.num_envs)
         if options and "tasks" in options:
             for i, task in enumerate(options["tasks"]):
                 self.set_task(i, task)

@@ -31,6 +31,7 @@ from gymnasium.vector.utils import batch_space
 from ._link import Channel, Participant, attempt_budget
 from .env import (EpisodeSeeds, EpisodeTracker, flat_observation, observation_space,
                   reference_action_space, stamp_ns)
+from .episode import vector_seeds
 from .errors import EpisodeOverError
 from .tasks import Task
 
@@ -127,14 +128,7 @@ class CompoSuiteRosVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         """Reset every environment. `seed`: an int s gives environment i the seed s + i (as
         Gymnasium's own vector envs do), a list one seed per environment."""
-        if seed is None:
-            seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, int):
-            seeds = [seed + i for i in range(self.num_envs)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} environments")
+        seeds = vector_seeds(seed, self.num_envs)
         if options and "tasks" in options:
             for i, task in enumerate(options["tasks"]):
                 self.set_task(i, task)

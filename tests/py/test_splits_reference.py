@@ -1,22 +1,23 @@
 """`composuite tasks --split ...` against CPython itself.
 
 The reference benchmark draws its train/test splits with CPython's global `random` module
-(docs/src/reference-facts.md §7.2). Here that algorithm is written out in Python from that
-description, run with CPython's own `random`, and its lists (reference names mapped to wire names)
-must equal the JSON of the `composuite` binary for many seeds, every experiment, several elements
-and sizes.
+(docs/src/reference-facts.md §7.2). `composuite_ros.compat.sample_tasks` is that algorithm
+written out in Python from that description, run with CPython's own `random`; its lists
+(reference names mapped to wire names) must equal the JSON of the `composuite` binary (the Rust
+implementation) for many seeds, every experiment, every element and several sizes. Two
+implementations in two languages, each from the description, checking each other.
 """
 
 from __future__ import annotations
 
-import itertools
 import json
 import os
-import random
 import subprocess
 from pathlib import Path
 
 import pytest
+
+from composuite_ros import compat
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -37,21 +38,10 @@ WIRE = {
 
 def reference_split(experiment: str, num_train: int, element: str | None, seed: int,
                     no_shuffle: bool = False) -> tuple[list[tuple], list[tuple]]:
-    """§7.2 with reference names, using CPython's `random` (state saved and restored)."""
-    axes = [ROBOTS, OBJECTS, OBSTACLES, OBJECTIVES]
-    if experiment == "smallscale":
-        axes = [[element] if element in axis else axis for axis in axes]
-    tasks = list(itertools.product(*axes))  # last axis (objective) varies fastest
-    saved = random.getstate()
-    random.seed(seed)
-    if not no_shuffle:
-        random.shuffle(tasks)
-    random.setstate(saved)
-    if experiment == "holdout":
-        with_elem = [t for t in tasks if element in t]
-        without = [t for t in tasks if element not in t]
-        return without[: num_train - 1] + with_elem[:1], with_elem[1:]
-    return tasks[:num_train], tasks[num_train:]
+    """§7.2 with reference names, using CPython's `random`: `composuite_ros.compat`'s
+    `sample_tasks`, the reference's algorithm written in Python (state saved and restored)."""
+    return compat.sample_tasks(experiment, num_train, smallscale_elem=element, holdout_elem=element,
+                               shuffling_seed=seed, no_shuffle=no_shuffle)
 
 
 def wire(task: tuple) -> str:
@@ -101,8 +91,8 @@ def test_default(seed: int) -> None:
         check("default", num_train, None, seed)
 
 
-# One element per axis and then some; reference spellings on purpose (the CLI accepts them).
-ELEMENTS = ["IIWA", "Kinova3", "Hollowbox", "Plate", "None", "ObjectWall", "Trashcan", "Push"]
+# Every element of every axis, in reference spellings on purpose (the CLI accepts them).
+ELEMENTS = ROBOTS + OBJECTS + OBSTACLES + OBJECTIVES
 
 
 @pytest.mark.parametrize("seed", SEEDS[::3])
