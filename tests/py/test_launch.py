@@ -40,8 +40,9 @@ def launch(*args: str, domain: int) -> subprocess.Popen:
 
 
 def test_two_realtime_environments_run_and_stop_cleanly_on_sigterm():
+    # --isolate: each node a process of its own (the composed default: test_composed.py).
     domain = random.randint(1, 200)
-    suite = launch("--envs", "2", "--namespace", "/lt", "--params-file",
+    suite = launch("--envs", "2", "--isolate", "--namespace", "/lt", "--params-file",
                    str(REPO / "params/realtime.yaml"), "--log-level", "warn", domain=domain)
     try:
         with ros_agent.Agent(namespace="/lt/env_01", domain_id=domain) as agent:

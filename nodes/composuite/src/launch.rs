@@ -1,11 +1,15 @@
 //! `composuite launch`: the node suite headless. Every environment is the three nodes
-//! (task_manager, sim, reward) as child processes in a namespace of its own; signals are passed
-//! on. A node that dies is started again (`--respawn`, like `respawn=True` in `ros2 launch`) up
-//! to a limit; past it, or when time is up, every node is stopped (SIGINT, then SIGKILL after a
-//! grace period) and the launcher exits with a code that says what happened.
+//! (task_manager, sim, reward) in a namespace of its own.
 //!
-//! The children are this same executable run as `composuite node KIND --ros-args ...`, so the
-//! launcher never looks for binaries on a path.
+//! With several environments the nodes are composed: they all run in this process, on one DDS
+//! participant, each on a thread of its own (`composuite_ros::container`); an environment whose
+//! node fails is stopped and started again (`--respawn`) while the others go on. With one
+//! environment, or with `--isolate`, every node is a child process of its own — this same
+//! executable run as `composuite node KIND --ros-args ...`, so the launcher never looks for
+//! binaries on a path — and signals are passed on; a node that dies is started again
+//! (`--respawn`, like `respawn=True` in `ros2 launch`). Past the respawn limit, or when time is
+//! up, every node is stopped (SIGINT, then SIGKILL after a grace period) and the launcher exits
+//! with a code that says what happened. A recorder is always a process of its own.
 
 use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus};
@@ -13,6 +17,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use composuite_core::TaskSpec;
+use composuite_ros::container::{Container, EnvironmentLaunch, NodeLaunch, RespawnPolicy};
 use composuite_ros::nodes::NodeKind;
 use composuite_ros::shared::ros_args::is_valid_name;
 
@@ -53,6 +58,12 @@ pub struct LaunchArgs {
     /// Number of environments.
     #[arg(long, default_value_t = 1)]
     envs: usize,
+    /// Every node a process of its own, as with one environment, instead of all environments'
+    /// nodes in this process on one DDS participant (the default with --envs > 1). Costs a
+    /// participant per node (discovery grows with the square of the nodes); buys isolation: a
+    /// node killed (SIGKILL) takes only itself down.
+    #[arg(long)]
+    isolate: bool,
     /// Seed of the first episode (environment i: seed + i) [default: 0].
     #[arg(long)]
     seed: Option<u64>,
@@ -339,6 +350,8 @@ fn signal(child: &Child, signal: i32) {
 pub(crate) struct Suite {
     exe: PathBuf,
     nodes: Vec<Running>,
+    /// The environments' nodes when they are composed into this process.
+    container: Option<Container>,
 }
 
 impl Suite {
@@ -350,6 +363,7 @@ impl Suite {
         let mut suite = Suite {
             exe,
             nodes: Vec::new(),
+            container: None,
         };
         // The recorder first, so it hears the environments from their first message.
         if args.record.is_some() {
@@ -359,6 +373,35 @@ impl Suite {
                 namespace,
                 node_arguments(args, NodeKind::Recorder, "/", 0),
             )?;
+        }
+        if args.composed() {
+            let environments = (0..args.envs)
+                .map(|index| {
+                    let namespace = env_namespace(&args.namespace, index, args.envs);
+                    EnvironmentLaunch {
+                        nodes: NodeKind::ALL
+                            .into_iter()
+                            .map(|kind| NodeLaunch {
+                                kind,
+                                argv: node_arguments(args, kind, &namespace, index),
+                            })
+                            .collect(),
+                        namespace,
+                    }
+                })
+                .collect();
+            let policy = RespawnPolicy {
+                limit: args.respawn,
+                delay: Duration::from_secs_f64(args.respawn_delay),
+            };
+            match Container::start(environments, policy) {
+                Ok(container) => suite.container = Some(container),
+                Err(e) => {
+                    stop_all(&mut suite.nodes);
+                    return Err(format!("cannot start the environments: {e}"));
+                }
+            }
+            return Ok(suite);
         }
         for index in 0..args.envs {
             let namespace = env_namespace(&args.namespace, index, args.envs);
@@ -417,6 +460,11 @@ impl Suite {
 
     /// The first node that exited on its own, described.
     pub(crate) fn died(&mut self) -> Option<String> {
+        if let Some(container) = &mut self.container
+            && let Err(death) = container.poll(Duration::ZERO)
+        {
+            return Some(death);
+        }
         self.nodes
             .iter_mut()
             .find_map(|n| n.child.try_wait().ok().flatten().map(|s| n.death(s)))
@@ -425,6 +473,9 @@ impl Suite {
     /// Start again every node that died, `delay` after its death, at most `limit` times per
     /// node. Err (the node's death, described) when one died once more than `limit` allows.
     fn respawn(&mut self, limit: u32, delay: Duration) -> Result<(), String> {
+        if let Some(container) = &mut self.container {
+            container.poll(Duration::ZERO)?;
+        }
         let now = Instant::now();
         for index in 0..self.nodes.len() {
             let n = &mut self.nodes[index];
@@ -469,11 +520,25 @@ impl Suite {
 
     /// Stop every node; true when all exited cleanly.
     pub(crate) fn stop(mut self) -> bool {
-        stop_all(&mut self.nodes)
+        // The environments first, then the recorder: it records until they are gone.
+        let mut clean = true;
+        if let Some(container) = self.container.take() {
+            if self.nodes.iter().any(|n| n.died_at.is_none()) {
+                std::thread::sleep(RECORDER_SETTLE);
+            }
+            clean = container.stop();
+        }
+        stop_all(&mut self.nodes) && clean
     }
 }
 
 impl LaunchArgs {
+    /// Whether the environments' nodes run composed in this process (several environments,
+    /// no `--isolate`).
+    pub(crate) fn composed(&self) -> bool {
+        self.envs > 1 && !self.isolate
+    }
+
     /// One lockstep environment of `task` in `namespace`, everything else at its default.
     pub(crate) fn one_environment(task: &str, namespace: &str, log_level: &str) -> LaunchArgs {
         LaunchArgs {
@@ -481,6 +546,7 @@ impl LaunchArgs {
             mode: Some("lockstep".into()),
             namespace: namespace.into(),
             envs: 1,
+            isolate: false,
             seed: None,
             horizon: None,
             sparse_rewards: false,
@@ -507,8 +573,13 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
         .map_err(|e| format!("cannot watch for signals: {e}"))?;
     let mut suite = Suite::start(args)?;
     eprintln!(
-        "composuite launch: {} environment(s) × 3 nodes started{}; Ctrl-C stops them",
+        "composuite launch: {} environment(s) × 3 nodes started {}{}; Ctrl-C stops them",
         args.envs,
+        if args.composed() {
+            "in this process (one DDS participant)"
+        } else {
+            "as processes"
+        },
         match &args.record {
             Some(dir) => format!(", recording into {}", dir.display()),
             None => String::new(),

@@ -6,12 +6,14 @@
 //! - [`reward`]: staged rewards and success;
 //! - [`recorder`]: records the wire into a rosbag2 bag;
 //! - [`player`]: plays a bag back into a running graph (`composuite bag play`);
+//! - [`container`]: many environments' nodes in one process on one participant;
 //! - [`nodes`]: the nodes by kind (specs and mains, for the binaries and `composuite launch`);
 //! - [`shared`]: start-up, parameters, logging, names, QoS, message conversions;
 //! - [`bag`]: rosbag2 bags in MCAP (writer, reader, reindex), for the recorder and the CLI.
 #![warn(missing_docs)]
 
 pub mod bag;
+pub mod container;
 pub mod nodes;
 pub mod player;
 pub mod recorder;

@@ -4,7 +4,10 @@
 use std::fmt;
 use std::process::ExitCode;
 
-use crate::shared::node::{NodeSpec, run_node};
+use crate::shared::node::{NodeSpec, RosNode, run_node};
+
+/// A node's main loop: runs on a started node until the channel delivers a stop.
+pub type NodeBody = fn(&mut RosNode, async_channel::Receiver<i32>) -> Result<(), String>;
 
 /// One of the suite's nodes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,11 +51,16 @@ impl NodeKind {
 
     /// Run the node with `argv` (the arguments after the program name) until a signal stops it.
     pub fn main(self, argv: &[String]) -> ExitCode {
+        run_node(self.spec(), argv, self.body())
+    }
+
+    /// What the node does once started, until its channel delivers a stop (a signal number).
+    pub fn body(self) -> NodeBody {
         match self {
-            NodeKind::Sim => run_node(&SIM, argv, crate::sim::run),
-            NodeKind::TaskManager => run_node(&TASK_MANAGER, argv, crate::task_manager::run),
-            NodeKind::Reward => run_node(&REWARD, argv, crate::reward::run),
-            NodeKind::Recorder => run_node(&RECORDER, argv, crate::recorder::run),
+            NodeKind::Sim => crate::sim::run,
+            NodeKind::TaskManager => crate::task_manager::run,
+            NodeKind::Reward => crate::reward::run,
+            NodeKind::Recorder => crate::recorder::run,
         }
     }
 }

@@ -276,6 +276,8 @@ pub struct RosNode {
     /// The wire format of this node's services (`service_mapping` parameter).
     pub service_mapping: ServiceMapping,
     parameter_services: Option<ParameterServices>,
+    /// Whether the participant is this node's alone (so its end is the participant's).
+    owns_participant: bool,
 }
 
 /// Why a node could not start (bad arguments, bad environment, DDS failure).
@@ -299,8 +301,20 @@ pub enum Startup {
 }
 
 impl RosNode {
-    /// Start a node from the process's arguments (without the program name) and environment.
+    /// Start a node from the process's arguments (without the program name) and environment,
+    /// on a DDS participant of its own.
     pub fn start(spec: &NodeSpec, argv: &[String]) -> Result<Startup, StartError> {
+        Self::start_in(spec, argv, None)
+    }
+
+    /// Start a node as [`RosNode::start`] does, on `shared`'s participant when given (many
+    /// nodes in one process, as ROS 2's composition puts them: one participant, so DDS
+    /// discovery does not grow with the square of the nodes), else on a participant of its own.
+    pub fn start_in(
+        spec: &NodeSpec,
+        argv: &[String],
+        shared: Option<&Context>,
+    ) -> Result<Startup, StartError> {
         let args = ros_args::parse(argv).map_err(|e| StartError(e.to_string()))?;
         if args.other.iter().any(|a| a == "-h" || a == "--help") {
             return Ok(Startup::Help(spec.help()));
@@ -330,19 +344,10 @@ impl RosNode {
             None => Level::Info,
         };
 
-        let dds_level = dds_log::parse_level(std::env::var(dds_log::DDS_LOG_VAR).ok().as_deref())
-            .map_err(StartError)?;
-        dds_log::install(dds_level);
-
-        let mut builder = DomainParticipantBuilder::new(environment.domain_id);
-        if environment.discovery_range != DiscoveryRange::Subnet {
-            builder = builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
-        }
-        let participant = builder
-            .build()
-            .map_err(|e| StartError(format!("cannot create the DDS participant: {e:?}")))?;
-        let context = Context::from_domain_participant(participant)
-            .map_err(|e| StartError(format!("cannot create the ROS context: {e:?}")))?;
+        let context = match shared {
+            Some(context) => context.clone(),
+            None => new_context(&environment)?,
+        };
 
         // No ros2-client spinner (see param_server): parameters are served by our own thread.
         let options = NodeOptions::new()
@@ -378,6 +383,7 @@ impl RosNode {
             parameters,
             service_mapping: mapping,
             parameter_services: Some(parameter_services),
+            owns_participant: shared.is_none(),
         })))
     }
 
@@ -558,9 +564,11 @@ impl RosNode {
     /// Stop the parameter services and wait for their thread.
     pub fn shutdown(mut self) {
         drop(self.parameter_services.take());
-        // Tearing down the participant, RustDDS reports every entity it can no longer
-        // unregister ("Cannot remove Writer GUID ...: Disconnected") as an error: expected here.
-        dds_log::quiet();
+        if self.owns_participant {
+            // Tearing down the participant, RustDDS reports every entity it can no longer
+            // unregister ("Cannot remove Writer GUID ...: Disconnected") as an error: expected.
+            dds_log::quiet();
+        }
     }
 }
 
@@ -604,6 +612,23 @@ pub fn shutdown_signal() -> std::io::Result<async_channel::Receiver<i32>> {
             }
         })?;
     Ok(rx)
+}
+
+/// A ROS context on a new DDS participant, as `environment` asks (domain, discovery range),
+/// with RustDDS's own log records at the level `COMPOSUITE_DDS_LOG` sets.
+pub fn new_context(environment: &RosEnvironment) -> Result<Context, StartError> {
+    let dds_level = dds_log::parse_level(std::env::var(dds_log::DDS_LOG_VAR).ok().as_deref())
+        .map_err(StartError)?;
+    dds_log::install(dds_level);
+    let mut builder = DomainParticipantBuilder::new(environment.domain_id);
+    if environment.discovery_range != DiscoveryRange::Subnet {
+        builder = builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
+    }
+    let participant = builder
+        .build()
+        .map_err(|e| StartError(format!("cannot create the DDS participant: {e:?}")))?;
+    Context::from_domain_participant(participant)
+        .map_err(|e| StartError(format!("cannot create the ROS context: {e:?}")))
 }
 
 /// The main of a node: start from `argv` (the arguments after the program name), run `body`

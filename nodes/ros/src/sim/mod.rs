@@ -123,6 +123,14 @@ pub const PARAMS: &[ParamSpec] = &[
                       gripper_action_controller",
         check: check_controllers,
     },
+    ParamSpec {
+        name: "fault_panic",
+        default: || ParameterValue::Boolean(false),
+        description: "fault injection, for testing how a suite survives a failing node: set it \
+                      to true and the sim panics at once (composed, its environment is \
+                      restarted; as a process, the process dies and launch respawns it)",
+        check: any_value,
+    },
 ];
 
 /// How the sim advances.
@@ -609,6 +617,10 @@ impl Sim {
             }
             ("controllers", _) => {
                 log.warn("controllers takes effect when the sim starts again; unchanged now")
+            }
+            ("fault_panic", ParameterValue::Boolean(true)) => {
+                log.error("fault_panic was set: panicking now, as asked");
+                panic!("fault_panic was set (fault injection)");
             }
             _ => {}
         }

@@ -1,0 +1,107 @@
+"""The composed suite: `composuite launch --envs 3` runs every environment's nodes in its own
+process on one DDS participant. Checked with real rclpy on Fast DDS: the nine nodes are ROS
+nodes in the graph (`ros2 node list`), no node process exists (the launcher's threads are the
+nodes), each environment steps bit-identical to the in-process env, and a node that fails (the
+sim's `fault_panic` parameter) takes down only its environment, which launch starts again
+while the others go on stepping."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+from rcl_interfaces.srv import SetParameters
+
+import node_suite
+from node_suite import float_bits, launch_running
+from rclpy_agent import RclpyAgent
+
+from composuite_ros import CompoSuiteNativeEnv, CompoSuiteRosEnv
+
+NS = "/cmp"
+ENVS = 3
+TASK = "IIWA/box/no_obstacle/pick_place"
+NAMESPACES = [f"{NS}/env_{i:02}" for i in range(ENVS)]
+
+
+@pytest.fixture(scope="module")
+def suite(tmp_path_factory):
+    with launch_running(tmp_path_factory.mktemp("composed"), NS, TASK, "--envs", str(ENVS),
+                        "--respawn", "2", "--respawn-delay", "0.5",
+                        service_mapping="fastdds") as launched:
+        yield launched
+
+
+def thread_names(pid: int) -> list[str]:
+    return [(task / "comm").read_text().strip() for task in Path(f"/proc/{pid}/task").iterdir()]
+
+
+def test_one_process_whose_threads_are_the_nodes(suite):
+    assert "in this process (one DDS participant)" in suite.text()
+    assert node_suite.node_processes(f"__ns:={NS}") == [], "no node runs as a process of its own"
+    threads = thread_names(suite.process.pid)
+    for i in range(ENVS):
+        for node in ("sim", "task_manager", "reward"):
+            assert f"{node}-{i}" in threads, sorted(threads)
+
+
+def test_every_node_is_a_ros_node_in_the_graph(suite):
+    agent = RclpyAgent(suite.domain)
+    try:
+        wanted = {(node, ns) for ns in NAMESPACES for node in ("sim", "task_manager", "reward")}
+        agent.spin_until(lambda: wanted <= set(agent.node.get_node_names_and_namespaces()), 25.0,
+                         "the nine nodes in rclpy's graph")
+        services = dict(agent.node.get_service_names_and_types())
+        for ns in NAMESPACES:
+            assert services[f"{ns}/reset"] == ["composuite_msgs/srv/Reset"]
+            assert f"{ns}/sim/set_parameters" in services
+    finally:
+        agent.close()
+
+
+def episode(env, seed: int, steps: int) -> list[tuple]:
+    observation, _ = env.reset(seed=seed)
+    trace = [(observation, 0.0)]
+    actions = np.random.default_rng(seed).uniform(-1, 1, size=(steps, 8))
+    for action in actions:
+        observation, reward, *_ = env.step(action)
+        trace.append((observation, reward))
+    return trace
+
+
+def assert_same(trace, expected, where: str) -> None:
+    assert len(trace) == len(expected), where
+    for step, ((obs, reward), (want_obs, want_reward)) in enumerate(zip(trace, expected)):
+        assert float_bits(obs) == float_bits(want_obs), f"{where}: observation of step {step}"
+        assert float_bits([reward]) == float_bits([want_reward]), f"{where}: reward of step {step}"
+
+
+def test_a_failing_node_restarts_its_environment_alone(suite):
+    expected = episode(CompoSuiteNativeEnv(TASK), 3, 20)
+    with CompoSuiteRosEnv(TASK, NAMESPACES[0]) as env_00:
+        assert_same(episode(env_00, 3, 20), expected, "env_00 before the fault")
+        agent = RclpyAgent(suite.domain)
+        try:
+            client = agent.node.create_client(SetParameters, f"{NAMESPACES[1]}/sim/set_parameters")
+            value = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=True)
+            agent.call(client, SetParameters.Request(parameters=[Parameter(name="fault_panic", value=value)]))
+        finally:
+            agent.close()
+        suite.wait_for_log(f"sim in {NAMESPACES[1]} failed: panicked: fault_panic was set")
+        assert f"stopping the other nodes of {NAMESPACES[1]} and starting it again in 0.5 s" \
+            " (restart 1 of 2); the other environments go on" in suite.text()
+        # While env_01 is down and coming back, env_00 steps on, still bit for bit.
+        assert_same(episode(env_00, 3, 20), expected, "env_00 during the restart")
+    deadline = time.monotonic() + 20
+    while suite.text().count(f"{NAMESPACES[1]}/sim up") < 2:
+        assert time.monotonic() < deadline, f"env_01 did not come back:\n{suite.text()[-3000:]}"
+        time.sleep(0.1)
+    assert suite.process.poll() is None, "the launcher goes on"
+    # The restarted environment serves episodes again, the same as before.
+    with CompoSuiteRosEnv(TASK, NAMESPACES[1], timeout=20.0) as env_01:
+        assert_same(episode(env_01, 3, 20), expected, "env_01 after its restart")
+    with CompoSuiteRosEnv(TASK, NAMESPACES[2]) as env_02:
+        assert_same(episode(env_02, 3, 5), expected[:6], "env_02")
