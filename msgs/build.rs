@@ -1,10 +1,14 @@
 //! Generates the Rust types from `msg/`, `srv/` (this package), `standard/<package>/` (the
-//! standard ROS 2 messages the suite uses) and `ros2_control/<package>/` (the ros2_control
-//! interfaces the sim's controllers offer). See `composuite_msgs_codegen`.
+//! standard ROS 2 messages the suite uses), `ros2_control/<package>/` (the ros2_control
+//! interfaces the sim's controllers offer) and `simulation_interfaces/<package>/` (the ROS 2
+//! standard simulation interfaces). See `composuite_msgs_codegen`.
 
 use std::path::{Path, PathBuf};
 
 use composuite_msgs_codegen::{Registry, rust};
+
+/// Folders holding one folder per interface package (other than composuite_msgs itself).
+const PACKAGE_FOLDERS: [&str; 3] = ["standard", "ros2_control", "simulation_interfaces"];
 
 fn main() {
     let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("set by cargo"));
@@ -21,7 +25,7 @@ fn main() {
     for path in &watched {
         println!("cargo:rerun-if-changed={}", path.display());
     }
-    for dir in ["msg", "srv", "standard", "ros2_control"] {
+    for dir in ["msg", "srv"].into_iter().chain(PACKAGE_FOLDERS) {
         println!("cargo:rerun-if-changed={}", root.join(dir).display());
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo")).join("generated.rs");
@@ -35,7 +39,7 @@ fn load(root: &Path, registry: &mut Registry, watched: &mut Vec<PathBuf>) -> Res
             .map_err(|e| e.to_string())?,
     );
     let mut packages = Vec::new();
-    for folder in ["standard", "ros2_control"] {
+    for folder in PACKAGE_FOLDERS {
         let folder = root.join(folder);
         packages.extend(
             std::fs::read_dir(&folder)

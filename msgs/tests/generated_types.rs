@@ -9,6 +9,9 @@ use std::path::{Path, PathBuf};
 use composuite_msgs::{ArrayKind, ElementType, MessageVisitor, RosMessage, TypeDescription, cdr};
 use rand::SeedableRng;
 
+/// The folders holding one folder per interface package besides composuite_msgs (as build.rs).
+const PACKAGE_FOLDERS: [&str; 3] = ["standard", "ros2_control", "simulation_interfaces"];
+
 fn msgs_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -19,10 +22,11 @@ fn source_text(ros_name: &str) -> Option<String> {
     let (package, kind, name) = (parts[0], parts[1], parts[2]);
     let base: PathBuf = if package == "composuite_msgs" {
         msgs_dir()
-    } else if msgs_dir().join("standard").join(package).is_dir() {
-        msgs_dir().join("standard").join(package)
     } else {
-        msgs_dir().join("ros2_control").join(package)
+        PACKAGE_FOLDERS
+            .iter()
+            .map(|folder| msgs_dir().join(folder).join(package))
+            .find(|dir| dir.is_dir())?
     };
     if kind == "msg" {
         return std::fs::read_to_string(base.join("msg").join(format!("{name}.msg"))).ok();
@@ -126,7 +130,7 @@ fn every_interface_file_has_a_type_and_fields_match() {
     };
     count(&msgs_dir().join("msg"), "msg", 1);
     count(&msgs_dir().join("srv"), "srv", 2);
-    for folder in ["standard", "ros2_control"] {
+    for folder in PACKAGE_FOLDERS {
         for package in std::fs::read_dir(msgs_dir().join(folder)).unwrap() {
             let package = package.unwrap().path();
             for (kind, per_file) in [("msg", 1), ("srv", 2), ("action", 3)] {
@@ -201,6 +205,15 @@ fn jazzy_type_hashes_pinned() {
         (
             geometry_msgs::msg::Pose::TYPE_HASH,
             "d501954e9476cea2996984e812054b68026ae0bfae789d9a10b23daf35cc90fa",
+        ),
+        // What simulation_interfaces' EntityState and SpawnEntity hold.
+        (
+            geometry_msgs::msg::Accel::TYPE_HASH,
+            "dc448243ded9b1fcbcca24aba0c22f013dae06c354ba2d849571c0a2a3f57ca0",
+        ),
+        (
+            geometry_msgs::msg::PoseStamped::TYPE_HASH,
+            "10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8",
         ),
         (
             rosgraph_msgs::msg::Clock::TYPE_HASH,

@@ -48,9 +48,13 @@ def interface_files(package: str, folder: Path) -> tuple[dict[str, str], dict[st
     return texts("msg"), texts("srv"), texts("action")
 
 
-# The packages that are not composuite_msgs: standard ROS 2 messages (msgs/standard) and the
-# ros2_control subsets (msgs/ros2_control), one folder per package in each.
-OTHER_PACKAGE_FOLDERS = ("standard", "ros2_control")
+# The packages that are not composuite_msgs: standard ROS 2 messages (msgs/standard), the
+# ros2_control subsets (msgs/ros2_control) and the standard simulation interfaces
+# (msgs/simulation_interfaces), one folder per package in each.
+OTHER_PACKAGE_FOLDERS = ("standard", "ros2_control", "simulation_interfaces")
+# Those of them that are colcon packages of their own (msgs/standard is not: the Jazzy wheels
+# provide those packages).
+COLCON_PACKAGE_FOLDERS = ("ros2_control", "simulation_interfaces")
 
 
 def other_message_files() -> dict[str, Path]:
@@ -67,9 +71,9 @@ def own_interface_files() -> tuple[dict[str, str], dict[str, str]]:
 
 
 def rosbags_store():
-    """The Jazzy type store of `rosbags`, plus our package and the ros2_control subsets
+    """The Jazzy type store of `rosbags`, plus our package, the ros2_control subsets
     (msgs/ros2_control/: control_msgs and controller_manager_msgs are not in rosbags' Jazzy
-    store) registered from our own files."""
+    store) and simulation_interfaces (msgs/simulation_interfaces/) registered from our own files."""
     from rosbags.interfaces import Nodetype
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -84,7 +88,8 @@ def rosbags_store():
             (_, definition), = parsed.items()
             types[f"{name}_{suffix}"] = definition
 
-    folders = [("composuite_msgs", MSGS)] + [(p.name, p) for p in sorted((MSGS / "ros2_control").iterdir())
+    folders = [("composuite_msgs", MSGS)] + [(p.name, p) for folder in COLCON_PACKAGE_FOLDERS
+                                             for p in sorted((MSGS / folder).iterdir())
                                              if (p / "package.xml").is_file()]
     for package, folder in folders:
         msgs, srvs, actions = interface_files(package, folder)
@@ -114,7 +119,9 @@ def canonical(store, typename: str, value) -> object:
     """A comparable form of a message value (a rosbags object or our JSON dict): floats become
     their hex bit pattern (so -0.0 != 0.0), float32 values are rounded to float32 first."""
     _, fields = store.fielddefs[typename]
-    get = (lambda n: value[n]) if isinstance(value, dict) else (lambda n: getattr(value, n))
+    # rclpy's class of an empty type has no attribute for EMPTY_FIELD.
+    get = ((lambda n: value[n]) if isinstance(value, dict)
+           else (lambda n: getattr(value, n, 0) if n == EMPTY_FIELD else getattr(value, n)))
     return {name: canonical_field(store, desc, get(name)) for name, desc in fields}
 
 
@@ -147,6 +154,10 @@ def canonical_base(base: str, value):
         # compare the byte.
         return int(value) & 0xFF
     return int(value)
+
+
+# The one field ROS 2 gives a type that has none (e.g. an empty service request).
+EMPTY_FIELD = "structure_needs_at_least_one_member"
 
 
 # ---- random values on the Python side (independent of the Rust generator) ---------------------
@@ -201,7 +212,9 @@ def random_plain(store, rng: random.Random, typename: str, max_len: int = 3) -> 
     _, fields = store.fielddefs[typename]
     out = {}
     for name, (kind, rest) in fields:
-        if kind == Nodetype.BASE:
+        if name == EMPTY_FIELD:
+            out[name] = 0  # what every ROS 2 peer (rclpy included) sends there
+        elif kind == Nodetype.BASE:
             out[name] = random_base(rng, rest[0], rest[1])
         elif kind == Nodetype.NAME:
             out[name] = random_plain(store, rng, rest, max_len)
