@@ -1,6 +1,6 @@
 //! `composuite_ros._native`: the in-process face of `composuite_core` for Python.
 //!
-//! One class, [`Batch`]: a `composuite_core::batch::EnvBatch` with its inputs and outputs as
+//! One class, `Batch`: a `composuite_core::batch::EnvBatch` with its inputs and outputs as
 //! numpy arrays it owns. Python writes the commands into `modes`, `seeds` and `actions`, calls
 //! `run()` (one call, the GIL released while the environments step on the batch's threads),
 //! and reads the rows back. The Gymnasium envs of `composuite_ros.native` are built on it; this
