@@ -307,7 +307,11 @@ def test_malformed_cdr_on_a_command_topic_is_logged_and_survived():
         reply, first = ros_agent.reset_with_joint_states(reset, states, seed=1)
         bad = DataWriter(agent.participant, Topic(agent.participant, "rt/mal/joint_command", Garbage),
                          qos=ros_agent.QOS_PROFILES["state"].to_dds())
-        time.sleep(0.5)
+        # Written before the sim's reader matched it, the garbage would simply be lost.
+        deadline = time.monotonic() + 10
+        while bad.get_publication_matched_status().current_count < 1:
+            assert time.monotonic() < deadline, "the sim's joint_command reader never matched"
+            time.sleep(0.05)
         for _ in range(3):
             bad.write(Garbage(byte=7))
         command.wait_for_subscribers(1, timeout=10)
