@@ -181,15 +181,20 @@ impl GoalFactor {
     }
 }
 
+/// Values in a flat observation with the task one-hots (93) or without them (77).
+pub fn flat_size(includes_task: bool) -> usize {
+    if includes_task {
+        FLAT_SIZE_WITH_TASK
+    } else {
+        FLAT_SIZE_WITHOUT_TASK
+    }
+}
+
 impl Observation {
     /// The flat vector in the reference order: object, obstacle, goal, [object_id, robot_id,
     /// obstacle_id, objective_id], robot.
     pub fn flat(&self) -> Vec<f64> {
-        let size = if self.includes_task {
-            FLAT_SIZE_WITH_TASK
-        } else {
-            FLAT_SIZE_WITHOUT_TASK
-        };
+        let size = flat_size(self.includes_task);
         let mut out = Vec::with_capacity(size);
         self.object.extend(&mut out);
         self.obstacle.extend(&mut out);

@@ -22,7 +22,7 @@ use std::fmt;
 
 use crate::TaskSpec;
 use crate::env::{Action, Env, EnvConfig, EnvError};
-use crate::obs::{FLAT_SIZE_WITH_TASK, FLAT_SIZE_WITHOUT_TASK};
+use crate::obs::{FLAT_SIZE_WITH_TASK, Observation, flat_size};
 use crate::rng::Mt19937;
 
 #[cfg(test)]
@@ -185,6 +185,15 @@ impl Default for Row {
     }
 }
 
+impl Row {
+    /// The row of a reset: its observation, nothing earned, no stage reached, step 0.
+    fn after_reset(observation: &Observation) -> Row {
+        let mut row = Row::default();
+        write_observation(&mut row.observation, &observation.flat());
+        row
+    }
+}
+
 /// Environments (each its own task) and the thread pool that steps them.
 pub struct EnvBatch {
     envs: Vec<Env>,
@@ -231,11 +240,7 @@ impl EnvBatch {
             }),
             None => tasks.iter().map(build).collect(),
         };
-        let observation_size = if config.task_observation {
-            FLAT_SIZE_WITH_TASK
-        } else {
-            FLAT_SIZE_WITHOUT_TASK
-        };
+        let observation_size = flat_size(config.task_observation);
         Ok(EnvBatch {
             rows: vec![Row::default(); envs.len()],
             envs,
@@ -293,9 +298,7 @@ impl EnvBatch {
         let observation = self.envs[index]
             .reset_from(rng)
             .map_err(|error| BatchError { index, error })?;
-        let row = &mut self.rows[index];
-        *row = Row::default();
-        write_observation(&mut row.observation, &observation.flat());
+        self.rows[index] = Row::after_reset(&observation);
         self.write_rows(&[index], out);
         Ok(())
     }
@@ -425,18 +428,7 @@ fn precheck(env: &Env, command: &BatchCommand) -> Result<(), EnvError> {
             crate::env::sample_object_start(env.task().obstacle, env.task().object, *seed)
                 .map(|_| ())
         }
-        BatchCommand::Step(action) => {
-            if env.episode() == 0 {
-                return Err(EnvError::NotReset);
-            }
-            if env.ended().is_some() {
-                return Err(EnvError::EpisodeOver {
-                    episode: env.episode(),
-                    steps: env.steps(),
-                });
-            }
-            action.check(env.world())
-        }
+        BatchCommand::Step(action) => env.check_step(action),
     }
 }
 
@@ -444,9 +436,7 @@ fn carry_out(env: &mut Env, command: &BatchCommand, row: &mut Row) -> Result<(),
     match command {
         BatchCommand::Idle => Ok(()),
         BatchCommand::Reset(seed) => {
-            let observation = env.reset(*seed)?;
-            *row = Row::default();
-            write_observation(&mut row.observation, &observation.flat());
+            *row = Row::after_reset(&env.reset(*seed)?);
             Ok(())
         }
         BatchCommand::Step(action) => {

@@ -277,16 +277,8 @@ impl Env {
     /// Advance one control period with `action`. Refused (nothing changes) after the episode
     /// ended, before the first reset, or for an invalid action.
     pub fn step(&mut self, action: &Action) -> Result<Step, EnvError> {
-        match self.phase {
-            Phase::NotReset => return Err(EnvError::NotReset),
-            Phase::Over { .. } => {
-                return Err(EnvError::EpisodeOver {
-                    episode: self.episode,
-                    steps: self.step,
-                });
-            }
-            Phase::Running => {}
-        }
+        // The action is checked where it is applied.
+        self.check_running()?;
         let clamped = action.apply(&mut self.world, &mut self.last_gripper_action)?;
         self.world.step_control();
         self.step += 1;
@@ -316,6 +308,24 @@ impl Env {
                 clamped,
             },
         })
+    }
+
+    /// Whether [`Env::step`] would refuse `action` now (no episode running, or an invalid
+    /// action), without stepping.
+    pub fn check_step(&self, action: &Action) -> Result<(), EnvError> {
+        self.check_running()?;
+        action.check(&self.world)
+    }
+
+    fn check_running(&self) -> Result<(), EnvError> {
+        match self.phase {
+            Phase::NotReset => Err(EnvError::NotReset),
+            Phase::Over { .. } => Err(EnvError::EpisodeOver {
+                episode: self.episode,
+                steps: self.step,
+            }),
+            Phase::Running => Ok(()),
+        }
     }
 
     /// The current observation.

@@ -315,18 +315,11 @@ fn run_node(
     stop: async_channel::Receiver<i32>,
 ) -> Outcome {
     let result = catch_unwind(AssertUnwindSafe(|| {
-        let mut node = match RosNode::start_in(kind.spec(), argv, Some(context)) {
-            Ok(Startup::Node(node)) => node,
-            Ok(Startup::Help(_)) => return Err("--help is not a node's argument here".into()),
-            Err(e) => return Err(format!("did not start: {e}")),
-        };
-        let result = (kind.body())(&mut node, stop);
-        match &result {
-            Ok(()) => node.log.info("shut down cleanly"),
-            Err(e) => node.log.log(crate::shared::node::Level::Fatal, e),
+        match RosNode::start_in(kind.spec(), argv, Some(context)) {
+            Ok(Startup::Node(node)) => node.run(kind.body(), stop),
+            Ok(Startup::Help(_)) => Err("--help is not a node's argument here".into()),
+            Err(e) => Err(format!("did not start: {e}")),
         }
-        node.shutdown();
-        result
     }));
     match result {
         Ok(Ok(())) => Outcome::Stopped,

@@ -561,7 +561,24 @@ impl RosNode {
             .map_err(|e| StartError(format!("service client {name}: {e:?}")))
     }
 
-    /// Stop the parameter services and wait for their thread.
+    /// Run `body` on this node until it returns (told to stop by `stop`), log how it ended
+    /// (a failure as fatal) and shut the node down.
+    pub fn run(
+        mut self,
+        body: impl FnOnce(&mut RosNode, async_channel::Receiver<i32>) -> Result<(), String>,
+        stop: async_channel::Receiver<i32>,
+    ) -> Result<(), String> {
+        let result = body(&mut self, stop);
+        match &result {
+            Ok(()) => self.log.info("shut down cleanly"),
+            Err(e) => self.log.log(Level::Fatal, e),
+        }
+        self.shutdown();
+        result
+    }
+
+    /// Stop the parameter services and wait for their thread; if the participant is this
+    /// node's own, quiet its teardown.
     pub fn shutdown(mut self) {
         drop(self.parameter_services.take());
         if self.owns_participant {
@@ -638,7 +655,7 @@ pub fn run_node(
     argv: &[String],
     body: impl FnOnce(&mut RosNode, async_channel::Receiver<i32>) -> Result<(), String>,
 ) -> std::process::ExitCode {
-    let mut node = match RosNode::start(spec, argv) {
+    let node = match RosNode::start(spec, argv) {
         Ok(Startup::Help(text)) => {
             print!("{text}");
             return std::process::ExitCode::SUCCESS;
@@ -656,17 +673,8 @@ pub fn run_node(
             return std::process::ExitCode::FAILURE;
         }
     };
-    let result = body(&mut node, signals);
-    let code = match &result {
-        Ok(()) => {
-            node.log.info("shut down cleanly");
-            std::process::ExitCode::SUCCESS
-        }
-        Err(e) => {
-            node.log.log(Level::Fatal, e);
-            std::process::ExitCode::FAILURE
-        }
-    };
-    node.shutdown();
-    code
+    match node.run(body, signals) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(_) => std::process::ExitCode::FAILURE,
+    }
 }
