@@ -244,13 +244,13 @@ def run_episodes_native(jobs: Sequence[_Job], envs: int | None = None, agent_spe
     one per core) stepped together; results in job order. An environment's `namespace` is
     `native/<index>`."""
     from . import _native
-    from .native import default_threads
+    from .native import default_threads, record_row
     make_agent = agent_factory(agent_spec)
     n = max(1, min(envs or default_threads(len(jobs)), len(jobs)))
     batch = _native.Batch([jobs[i].task for i in range(n)], threads=threads or default_threads(n),
                           horizon=horizon, use_task_id_obs=use_task_id_obs)
     period_ns = batch.control_period_ns
-    lifted, at_horizon = _native.end_reasons(horizon)
+    end_reasons = _native.end_reasons(horizon)
     agents = [make_agent() for _ in range(n)]
     tasks = batch.tasks()
     stage_names = [list(batch.stage_names(i)) for i in range(n)]
@@ -287,20 +287,12 @@ def run_episodes_native(jobs: Sequence[_Job], envs: int | None = None, agent_spe
             modes[i] = _native.MODE_STEP
         batch.run()
         for i in active:
-            terminated, truncated = bool(batch.terminated[i]), bool(batch.truncated[i])
-            names = stage_names[i]
-            length = int(batch.steps[i])
-            info = trackers[i].record(
-                stage_names=names, stage_values=batch.stage_values[i, :len(names)],
-                current_stage=batch.current_stage[i], reward=batch.rewards[i],
-                success=batch.success[i], step=length, sim_time=(length * period_ns) * 1e-9,
-                reason=lifted if terminated else at_horizon if truncated else "",
-                done=terminated or truncated)
+            _, _, _, info = record_row(trackers[i], batch, i, stage_names[i], end_reasons, period_ns)
             steps += 1
             if trackers[i].done:
                 job, running[i] = running[i], None
                 results.append(EpisodeResult(job.split, job.task, job.seed, f"native/{i}", batch.episode(i),
-                                             length, trackers[i].episode_return, trackers[i].success,
+                                             info["step"], trackers[i].episode_return, trackers[i].success,
                                              info["furthest_stage"]))
                 successes += results[-1].success
                 bar.update(len(results), steps, successes)

@@ -51,6 +51,23 @@ def _task_name(task: str | Task) -> str:
     return str(Task.parse(task)) if not isinstance(task, str) else task
 
 
+def record_row(tracker: EpisodeTracker, batch, index: int, stage_names: list[str],
+               end_reasons: tuple[str, str], period_ns: int) -> tuple[float, bool, bool, dict[str, Any]]:
+    """Environment `index`'s row of `batch` after a step, taken by its episode's `tracker`:
+    (reward, terminated, truncated, info), the info as `CompoSuiteRosEnv` gives it.
+    `end_reasons` is `_native.end_reasons(horizon)`: the objective's and the horizon's text."""
+    terminated, truncated = bool(batch.terminated[index]), bool(batch.truncated[index])
+    steps = int(batch.steps[index])
+    reward = float(batch.rewards[index])
+    lifted, at_horizon = end_reasons
+    info = tracker.record(
+        stage_names=stage_names, stage_values=batch.stage_values[index, :len(stage_names)],
+        current_stage=batch.current_stage[index], reward=reward, success=batch.success[index],
+        step=steps, sim_time=(steps * period_ns) * 1e-9,
+        reason=lifted if terminated else at_horizon if truncated else "", done=terminated or truncated)
+    return reward, terminated, truncated, info
+
+
 class CompoSuiteNativeEnv(gymnasium.Env):
     """One environment in-process, with the reference's spaces (see the module docs).
 
@@ -79,18 +96,16 @@ class CompoSuiteNativeEnv(gymnasium.Env):
                                     use_task_id_obs=use_task_id_obs, reward_shaping=reward_shaping,
                                     reward_scale=reward_scale, action_mode=action_mode)
         self._period_ns = self._batch.control_period_ns
-        self._lifted_reason, self._horizon_reason = _native.end_reasons(self._batch.horizon)
+        self._end_reasons = _native.end_reasons(self._batch.horizon)
         self.observation_space = observation_space(use_task_id_obs)
         self._on_new_task()
         self._seeds = EpisodeSeeds()
         self._tracker: EpisodeTracker | None = None
         self._clock_ns = 0
-        # Views of the batch's buffers (one row each), read after every run().
+        # Views of the batch's buffers (one row each).
         b = self._batch
         self._modes, self._seed_in, self._action_in = b.modes, b.seeds, b.actions
-        self._obs, self._reward, self._terminated = b.observations, b.rewards, b.terminated
-        self._truncated, self._success, self._stages = b.truncated, b.success, b.stage_values
-        self._current, self._steps = b.current_stage, b.steps
+        self._obs, self._steps = b.observations, b.steps
 
     # ---- the Gymnasium API ----------------------------------------------------------------------
 
@@ -122,15 +137,8 @@ class CompoSuiteNativeEnv(gymnasium.Env):
         self._modes[0] = _native.MODE_STEP
         self._batch.run()
         self._clock_ns += self._period_ns
-        terminated, truncated = bool(self._terminated[0]), bool(self._truncated[0])
-        steps = int(self._steps[0])
-        reward = float(self._reward[0])
-        info = self._tracker.record(
-            stage_names=self._stage_names, stage_values=self._stages[0, :len(self._stage_names)],
-            current_stage=self._current[0], reward=reward, success=self._success[0], step=steps,
-            sim_time=(steps * self._period_ns) * 1e-9,
-            reason=self._lifted_reason if terminated else self._horizon_reason if truncated else "",
-            done=terminated or truncated)
+        reward, terminated, truncated, info = record_row(
+            self._tracker, self._batch, 0, self._stage_names, self._end_reasons, self._period_ns)
         return self._obs[0].copy(), reward, terminated, truncated, info
 
     # ---- beyond Gymnasium -----------------------------------------------------------------------

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import statistics
 import subprocess
@@ -25,19 +24,18 @@ import threading
 import time
 from pathlib import Path
 
-from node_suite import cpu_seconds, node_processes
+from node_suite import cpu_seconds, node_processes, rss_bytes
 
 HORIZON = 500
 # For the soak's progress lines only: bag bytes per env step measured on the default session.
 BYTES_PER_STEP_GUESS = 558
-PAGE = os.sysconf("SC_PAGE_SIZE")
 
 
 def sample(pid: int) -> tuple[float, int] | None:
     """(CPU seconds, RSS bytes) of `pid`, or None once it is gone."""
     try:
         cpu = cpu_seconds(pid)
-        rss = int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * PAGE
+        rss = rss_bytes(pid)
         return cpu, rss
     except (OSError, IndexError, ValueError):
         return None

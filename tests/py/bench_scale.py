@@ -55,13 +55,11 @@ def process_tree(root: int) -> list[int]:
 
 
 def rss_mb(pid: int) -> float:
+    """Resident MB of `pid`, 0 once it is gone."""
     try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    except OSError:
-        pass
-    return 0.0
+        return node_suite.rss_bytes(pid) / 2**20
+    except (OSError, IndexError, ValueError):
+        return 0.0
 
 
 def tree_cpu_seconds(root: int) -> float:

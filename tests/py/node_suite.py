@@ -25,6 +25,7 @@ NODES = ("task_manager", "sim", "reward")
 # Seconds a node gets to exit after SIGINT.
 SHUTDOWN_TIMEOUT = 5.0
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")  # units of /proc/PID/stat times
+PAGE_SIZE = os.sysconf("SC_PAGE_SIZE")  # units of /proc/PID/statm sizes
 
 
 def node_dir() -> Path:
@@ -57,6 +58,11 @@ def cpu_seconds(pid: int) -> float:
     and stime). OSError once the process is gone."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS
+
+
+def rss_bytes(pid: int) -> int:
+    """Resident memory of process `pid` in bytes (/proc/PID/statm). OSError once it is gone."""
+    return int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * PAGE_SIZE
 
 
 def node_processes(marker: str, kind: str | None = None) -> list[int]:
