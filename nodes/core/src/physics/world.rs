@@ -253,6 +253,11 @@ impl SimWorld {
         let ground = physics.insert_body(RigidBodyBuilder::fixed());
         physics.insert_collider(
             ColliderBuilder::halfspace(rapier3d::na::Unit::new_unchecked(Vector::Z))
+                .collision_groups(InteractionGroups::new(
+                    FLOOR_GROUP,
+                    Group::ALL,
+                    InteractionTestMode::And,
+                ))
                 .user_data(ColliderTag::Ground.encode()),
             Some(ground),
         );
@@ -845,12 +850,94 @@ fn coordinate_axis(kind: JointKind) -> usize {
     }
 }
 
+/// The floor's collision group: colliders whose filter leaves it out are never paired with
+/// the floor, so the broad phase does not hand such pairs to the narrow phase at all.
+const FLOOR_GROUP: Group = Group::GROUP_1;
+
+/// Clearance (m) kept between the floor and the lowest point a body could reach before its
+/// floor pair is dropped: far more than rapier's contact prediction distance (2 mm).
+const FLOOR_CLEARANCE: f64 = 0.05;
+
+/// For each body of the arm, whether no joint configuration brings any of its collision shapes
+/// to the floor. The floor is an infinite half-space, so the broad phase pairs it with every
+/// collider, and its narrow-phase tests were ~5 % of a physics step; but the arm stands on a
+/// pedestal, and its inner links cannot swing that low.
+fn bodies_that_cannot_reach_floor(model: &RobotModel, poses: &[Isometry3<f64>]) -> Vec<bool> {
+    lowest_reach(model, poses)
+        .iter()
+        .map(|lowest| lowest.is_some_and(|z| z > FLOOR_CLEARANCE))
+        .collect()
+}
+
+/// For each moving body, a height (m) that none of its collision shapes can get below in any
+/// joint configuration (`None` for the fixed base), judged from the model alone: the first
+/// joint's child frame sits on its axis, so it stays put; every point of a body lies within
+/// the sum of the joint offsets (and prismatic travels) from there, plus the body's own
+/// farthest collision point.
+fn lowest_reach(model: &RobotModel, poses: &[Isometry3<f64>]) -> Vec<Option<f64>> {
+    let shoulder = poses[model.joints[0].child].translation.vector;
+    // Farthest distance from the shoulder a body's frame origin can get.
+    let mut frame_reach = vec![0.0; model.bodies.len()];
+    for (j, joint) in model.joints.iter().enumerate() {
+        frame_reach[joint.child] = if j == 0 {
+            0.0
+        } else {
+            let travel = match (joint.kind, joint.limits) {
+                (JointKind::Prismatic, Some((lo, hi))) => lo.abs().max(hi.abs()),
+                _ => 0.0,
+            };
+            frame_reach[joint.parent] + joint.origin.translation.vector.norm() + travel
+        };
+    }
+    model
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(b, body)| {
+            if !model.joints.iter().any(|j| j.child == b) {
+                // The fixed base: static colliders are never paired with the (static) floor.
+                return None;
+            }
+            let shape_reach = body
+                .collisions
+                .iter()
+                .map(|c| c.pose.translation.vector.norm() + bounding_radius(&c.shape))
+                .fold(0.0, f64::max);
+            Some(shoulder.z - (frame_reach[b] + shape_reach))
+        })
+        .collect()
+}
+
+/// The radius of a sphere about a shape's own origin that holds the whole shape.
+fn bounding_radius(shape: &Shape) -> f64 {
+    match *shape {
+        Shape::Box(h) => h.norm(),
+        Shape::Capsule {
+            radius,
+            half_length,
+        } => half_length + radius,
+        Shape::Cylinder {
+            radius,
+            half_length,
+        } => radius.hypot(half_length),
+        Shape::Sphere(r) => r,
+    }
+}
+
 fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f64>) -> ArmHandles {
     // Body poses at q = 0, from the joint origins.
     let mut poses: Vec<Isometry3<f64>> = vec![*base; model.bodies.len()];
     for joint in &model.joints {
         poses[joint.child] = poses[joint.parent] * joint.origin;
     }
+    let above_floor = bodies_that_cannot_reach_floor(model, &poses);
+    let floor_filter = |body: usize| {
+        if above_floor[body] {
+            Group::ALL.difference(FLOOR_GROUP)
+        } else {
+            Group::ALL
+        }
+    };
     let mut bodies = Vec::with_capacity(model.bodies.len());
     let mut finger_colliders = Vec::new();
     for (index, body) in model.bodies.iter().enumerate() {
@@ -874,6 +961,11 @@ fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f
             let tag = tag_for(&collision.name, index);
             let collider = ColliderBuilder::new(shape)
                 .position(pose)
+                .collision_groups(InteractionGroups::new(
+                    Group::ALL,
+                    floor_filter(index),
+                    InteractionTestMode::And,
+                ))
                 .density(0.0)
                 .friction(if matches!(tag, ColliderTag::Arm(_)) {
                     0.5
@@ -945,5 +1037,57 @@ fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f
         grip_site: model.links[GRIP_SITE_LINK],
         hand: model.links[HAND_LINK],
         downstream,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::axes::AxisElement;
+    use rand::{Rng, SeedableRng};
+
+    /// The floor filter rests on a bound, which must hold in every configuration: no collision
+    /// shape of a body comes below its `lowest_reach`, over random joint positions within the
+    /// limits (continuous joints anywhere), for every arm.
+    #[test]
+    fn bodies_kept_from_the_floor_never_reach_it() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(31);
+        for robot in Robot::all() {
+            let mut world = SimWorld::new(robot, PhysicsParams::default());
+            let mut poses = vec![robot_base_pose(); world.model.bodies.len()];
+            for joint in &world.model.joints {
+                poses[joint.child] = poses[joint.parent] * joint.origin;
+            }
+            let above = bodies_that_cannot_reach_floor(world.model, &poses);
+            assert!(
+                above.iter().filter(|&&a| a).count() >= 4,
+                "{robot:?}: the filter should spare at least the four inner links: {above:?}"
+            );
+            let bound = lowest_reach(world.model, &poses);
+            for _ in 0..2000 {
+                let q: [f64; ARM_DOF] = std::array::from_fn(|j| {
+                    let (lo, hi) = world.model.joints[j]
+                        .limits
+                        .unwrap_or((-std::f64::consts::PI, std::f64::consts::PI));
+                    rng.random_range(lo..=hi)
+                });
+                world.reset_arm(&q, FINGER_OPEN);
+                for (b, &handle) in world.arm.bodies.iter().enumerate() {
+                    let Some(bound) = bound[b] else { continue };
+                    for &c in world.physics.bodies[handle].colliders() {
+                        let collider = &world.physics.colliders[c];
+                        let aabb = collider
+                            .shape()
+                            .compute_aabb(&world.collider_pose(collider));
+                        // AABBs of rotated shapes overshoot the shape; the bound holds for them too.
+                        assert!(
+                            aabb.mins.z as f64 >= bound - 1e-4,
+                            "{robot:?} body {b} at q = {q:?}: z = {} below its bound {bound}",
+                            aabb.mins.z
+                        );
+                    }
+                }
+            }
+        }
     }
 }

@@ -258,15 +258,22 @@ pub struct JointGenericInternalConstraintBuilder {
     link: MultibodyLinkId,
     j_id: usize,
     constraint_id: usize,
+    /// CompoSuite-ROS patch: leave out the motor and limit rows that cannot act (see
+    /// `MultibodyJoint::velocity_constraints`); fixed when the builder is generated.
+    only_active: bool,
 }
 
 impl JointGenericInternalConstraintBuilder {
-    pub fn num_constraints(multibodies: &MultibodyJointSet, link_id: &MultibodyLinkId) -> usize {
+    pub fn num_constraints(
+        multibodies: &MultibodyJointSet,
+        link_id: &MultibodyLinkId,
+        only_active: bool,
+    ) -> usize {
         let multibody = &multibodies[link_id.multibody];
         let link = multibody.link(link_id.id).unwrap();
         // This link's own motor/limit/friction constraints, plus the DoF
         // couplings it owns (a coupling is owned by its first joint's link).
-        link.joint().num_velocity_constraints()
+        link.joint().num_velocity_constraints_to_build(only_active)
             + multibody.num_friction_constraints(link_id.id)
             + multibody.num_couplings_owned_by(link_id.id)
     }
@@ -278,12 +285,10 @@ impl JointGenericInternalConstraintBuilder {
         j_id: &mut usize,
         jacobians: &mut DVector,
         out_constraint_id: &mut usize,
+        only_active: bool,
     ) {
         let multibody = &multibodies[link_id.multibody];
-        let link = multibody.link(link_id.id).unwrap();
-        let num_constraints = link.joint().num_velocity_constraints()
-            + multibody.num_friction_constraints(link_id.id)
-            + multibody.num_couplings_owned_by(link_id.id);
+        let num_constraints = Self::num_constraints(multibodies, link_id, only_active);
 
         if num_constraints == 0 {
             return;
@@ -293,6 +298,7 @@ impl JointGenericInternalConstraintBuilder {
             link: *link_id,
             j_id: *j_id,
             constraint_id: *out_constraint_id,
+            only_active,
         });
 
         *j_id += num_constraints * multibody.ndofs() * 2;
@@ -319,6 +325,7 @@ impl JointGenericInternalConstraintBuilder {
             self.j_id,
             jacobians,
             &mut out[self.constraint_id..],
+            self.only_active,
         );
         // DoF couplings owned by this link follow its own constraints, both in
         // the jacobian buffer (each constraint reserves `2·ndofs`) and in the

@@ -73,13 +73,18 @@ impl JointConstraintsSet {
         multibodies: &MultibodyJointSet,
         joints_all: &[JointGraphEdge],
         j_id: &mut usize,
+        only_active: bool,
     ) {
         // Count the internal and external constraints builder.
         let num_external_constraint_builders = self.generic_two_body_interactions.len();
         let mut num_internal_constraint_builders = 0;
         for handle in island_bodies {
             if let Some(link_id) = multibodies.rigid_body_link(*handle) {
-                if JointGenericInternalConstraintBuilder::num_constraints(multibodies, link_id) > 0
+                if JointGenericInternalConstraintBuilder::num_constraints(
+                    multibodies,
+                    link_id,
+                    only_active,
+                ) > 0
                 {
                     num_internal_constraint_builders += 1;
                 }
@@ -128,6 +133,7 @@ impl JointConstraintsSet {
                     j_id,
                     &mut self.generic_jacobians,
                     &mut num_constraints,
+                    only_active,
                 );
                 if num_constraints != prev_num_constraints {
                     curr_builder += 1;

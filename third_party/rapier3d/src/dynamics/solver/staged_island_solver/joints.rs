@@ -536,6 +536,10 @@ impl StagedIslandSolver {
         multibodies: &MultibodyJointSet,
         impulse_joints: &[JointGraphEdge],
     ) {
+        // CompoSuite-ROS patch: the multibody rows that cannot act are left out when the step
+        // has one substep, so that the joint coordinates they are judged by are the ones the
+        // rows are solved at (see `MultibodyJoint::velocity_constraints`).
+        let only_active = self.groups.len() == 1 && self.groups[0].num_substeps == 1;
         let joints = &mut self.joint_constraints;
         joints.generic_jacobians.fill(0.0);
         joints.generic_velocity_constraints.clear();
@@ -547,6 +551,7 @@ impl StagedIslandSolver {
             multibodies,
             impulse_joints,
             &mut j_id,
+            only_active,
         );
     }
 }
