@@ -9,7 +9,7 @@
 
 use nalgebra::{Isometry3, Matrix3, SMatrix, Vector3};
 
-use super::robot_model::RobotModel;
+use super::robot_model::{MAX_BODIES, RobotModel};
 use super::world::ARM_DOF;
 
 /// M(q) and the bias torques of the 7 arm joints.
@@ -45,6 +45,7 @@ struct JointFrame {
 }
 
 /// A body's mass properties in the world frame.
+#[derive(Clone, Copy)]
 struct WorldBody {
     mass: f64,
     com: Vector3<f64>,
@@ -53,24 +54,27 @@ struct WorldBody {
     link: usize,
 }
 
-/// M(q) and the bias torques of the arm in `arm`'s state.
+/// M(q) and the bias torques of the arm in `arm`'s state. Runs every physics step, so it keeps
+/// its per-joint and per-body values on the stack.
 pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
     let model = arm.model;
     debug_assert!(
         (1..ARM_DOF).all(|j| model.joints[j].parent == model.joints[j - 1].child),
         "the arm joints form a chain"
     );
-    let joints: Vec<JointFrame> = (0..ARM_DOF)
-        .map(|j| {
-            let frame = arm.body_poses[model.joints[j].child];
-            JointFrame {
-                anchor: frame.translation.vector,
-                axis: frame.rotation * model.joints[j].axis,
-            }
-        })
-        .collect();
-    let bodies: Vec<Option<WorldBody>> = (0..model.bodies.len())
-        .map(|b| {
+    let joints: [JointFrame; ARM_DOF] = std::array::from_fn(|j| {
+        let frame = arm.body_poses[model.joints[j].child];
+        JointFrame {
+            anchor: frame.translation.vector,
+            axis: frame.rotation * model.joints[j].axis,
+        }
+    });
+    // (`robot_model` refuses models with more bodies.)
+    let bodies: [Option<WorldBody>; MAX_BODIES] = std::array::from_fn(|b| {
+        if b >= model.bodies.len() {
+            return None;
+        }
+        {
             let link = (0..ARM_DOF)
                 .rev()
                 .find(|&j| arm.downstream[j].contains(&b))?;
@@ -83,8 +87,8 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
                 inertia: r.matrix() * body.inertia * r.matrix().transpose(),
                 link,
             })
-        })
-        .collect();
+        }
+    });
 
     // M: for i ≤ j, the bodies both joints move are those downstream of j.
     let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
@@ -121,18 +125,15 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
         anchor_acc[j] = acc + a.cross(&d) + w.cross(&w.cross(&d));
     }
     let g = Vector3::new(0.0, 0.0, -arm.gravity);
-    let wrenches: Vec<Option<(Vector3<f64>, Vector3<f64>)>> = bodies
-        .iter()
-        .map(|body| {
-            let body = body.as_ref()?;
-            let (w, a) = (omega[body.link], alpha[body.link]);
-            let r = body.com - joints[body.link].anchor;
-            let com_acc = anchor_acc[body.link] + a.cross(&r) + w.cross(&w.cross(&r));
-            let force = body.mass * (com_acc - g);
-            let moment = body.inertia * a + w.cross(&(body.inertia * w));
-            Some((force, moment))
-        })
-        .collect();
+    let wrenches: [Option<(Vector3<f64>, Vector3<f64>)>; MAX_BODIES] = std::array::from_fn(|b| {
+        let body = bodies[b].as_ref()?;
+        let (w, a) = (omega[body.link], alpha[body.link]);
+        let r = body.com - joints[body.link].anchor;
+        let com_acc = anchor_acc[body.link] + a.cross(&r) + w.cross(&w.cross(&r));
+        let force = body.mass * (com_acc - g);
+        let moment = body.inertia * a + w.cross(&(body.inertia * w));
+        Some((force, moment))
+    });
     let bias = std::array::from_fn(|j| {
         let joint = &joints[j];
         let mut torque = Vector3::zeros();

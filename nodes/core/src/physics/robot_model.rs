@@ -33,6 +33,9 @@ pub const GRIP_SITE_LINK: &str = "grip_site";
 pub const HAND_LINK: &str = "right_hand";
 /// Finger joint names (left opens with +q, right with -q).
 pub const FINGER_JOINTS: [&str; 2] = ["l_finger_joint", "r_finger_joint"];
+/// The most rigid bodies an arm model may have (each arm has 10: the base, 7 links, 2
+/// fingers), so per-step work can keep per-body values on the stack.
+pub const MAX_BODIES: usize = 12;
 
 /// A collision primitive in its body's frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -428,6 +431,12 @@ fn merge(
     }
     for (body, acc) in model.bodies.iter_mut().zip(&accumulators) {
         (body.mass, body.com, body.inertia) = acc.finish();
+    }
+    if model.bodies.len() > MAX_BODIES {
+        return Err(ModelError(format!(
+            "{} rigid bodies after merging fixed links; at most {MAX_BODIES} are supported",
+            model.bodies.len()
+        )));
     }
     Ok(model)
 }

@@ -7,8 +7,8 @@ use rapier3d::prelude::*;
 use super::arm_dynamics::{ArmDynamics, ArmState, arm_dynamics};
 use super::params::{ArmGains, GripperParams, PhysicsParams};
 use super::robot_model::{
-    CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, RobotModel, Shape,
-    robot_model,
+    CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, MAX_BODIES, RobotModel,
+    Shape, robot_model,
 };
 use super::tags::{ColliderTag, Side};
 use super::torsion::TorsionalFriction;
@@ -523,15 +523,13 @@ impl SimWorld {
 
     /// The arm's mass matrix and bias torques now.
     pub fn dynamics(&self) -> ArmDynamics {
-        let body_poses: Vec<Isometry3<f64>> = self
-            .arm
-            .bodies
-            .iter()
-            .map(|&h| from_pose(self.physics.bodies[h].position()))
-            .collect();
+        let mut body_poses = [Isometry3::identity(); MAX_BODIES];
+        for (pose, &h) in body_poses.iter_mut().zip(&self.arm.bodies) {
+            *pose = from_pose(self.physics.bodies[h].position());
+        }
         arm_dynamics(&ArmState {
             model: self.model,
-            body_poses: &body_poses,
+            body_poses: &body_poses[..self.arm.bodies.len()],
             downstream: &self.arm.downstream,
             armature: &self.gains.armature,
             velocities: &self.arm_velocities(),
