@@ -14,6 +14,9 @@
 //!   `joint_trajectory_controller/{follow_joint_trajectory,joint_trajectory}`,
 //!   `forward_position_controller/commands`, `gripper_action_controller/gripper_cmd`, and
 //!   `controller_manager/{list_controllers,list_hardware_interfaces}`;
+//! - its part of the ROS 2 standard simulation interfaces ([`crate::simulation_interfaces`]):
+//!   features, simulation state (lockstep = PAUSED, realtime = PLAYING), `step_simulation` and
+//!   the `simulate_steps` action (each step taken as a lockstep command's step), entities;
 //! - every period runs read → update → write on one timestamp through the [`hardware`] seam;
 //! - `lockstep` mode: each `joint_command`, reference action or forward command advances exactly
 //!   one control period; a trajectory or gripper goal (or topic trajectory) advances the sim

@@ -71,7 +71,11 @@ impl Servers {
             entity_bounds: node.server::<srv::GetEntityBounds>(names::GET_ENTITY_BOUNDS)?,
             spawn: node.server::<srv::SpawnEntity>(names::SPAWN_ENTITY)?,
             delete: node.server::<srv::DeleteEntity>(names::DELETE_ENTITY)?,
-            steps: node.action_server(names::SIMULATE_STEPS, "simulation_interfaces", "SimulateSteps")?,
+            steps: node.action_server(
+                names::SIMULATE_STEPS,
+                "simulation_interfaces",
+                "SimulateSteps",
+            )?,
         })
     }
 
@@ -79,21 +83,86 @@ impl Servers {
     pub(super) fn requests(&self) -> impl FusedStream<Item = Request> + '_ {
         let u = Request::Unreadable;
         futures::stream::select_all([
-            si::request_stream(&self.features, names::GET_SIMULATOR_FEATURES, |id, _| Request::Features(id), u),
-            si::request_stream(&self.get_state, names::GET_SIMULATION_STATE, |id, _| Request::GetState(id), u),
-            si::request_stream(&self.set_state, names::SET_SIMULATION_STATE, Request::SetState, u),
+            si::request_stream(
+                &self.features,
+                names::GET_SIMULATOR_FEATURES,
+                |id, _| Request::Features(id),
+                u,
+            ),
+            si::request_stream(
+                &self.get_state,
+                names::GET_SIMULATION_STATE,
+                |id, _| Request::GetState(id),
+                u,
+            ),
+            si::request_stream(
+                &self.set_state,
+                names::SET_SIMULATION_STATE,
+                Request::SetState,
+                u,
+            ),
             si::request_stream(&self.step, names::STEP_SIMULATION, Request::Step, u),
             si::request_stream(&self.entities, names::GET_ENTITIES, Request::Entities, u),
-            si::request_stream(&self.entity_info, names::GET_ENTITY_INFO, Request::EntityInfo, u),
-            si::request_stream(&self.entity_state, names::GET_ENTITY_STATE, Request::EntityState, u),
-            si::request_stream(&self.entities_states, names::GET_ENTITIES_STATES, Request::EntitiesStates, u),
-            si::request_stream(&self.set_entity_state, names::SET_ENTITY_STATE, Request::SetEntityState, u),
-            si::request_stream(&self.entity_bounds, names::GET_ENTITY_BOUNDS, Request::EntityBounds, u),
-            si::request_stream(&self.spawn, names::SPAWN_ENTITY, |id, _| Request::Spawn(id), u),
-            si::request_stream(&self.delete, names::DELETE_ENTITY, |id, _| Request::Delete(id), u),
-            si::request_stream(self.steps.goal_service(), names::SIMULATE_STEPS, Request::StepsGoal, u),
-            si::request_stream(self.steps.cancel_service(), names::SIMULATE_STEPS, Request::StepsCancel, u),
-            si::request_stream(self.steps.result_service(), names::SIMULATE_STEPS, Request::StepsResult, u),
+            si::request_stream(
+                &self.entity_info,
+                names::GET_ENTITY_INFO,
+                Request::EntityInfo,
+                u,
+            ),
+            si::request_stream(
+                &self.entity_state,
+                names::GET_ENTITY_STATE,
+                Request::EntityState,
+                u,
+            ),
+            si::request_stream(
+                &self.entities_states,
+                names::GET_ENTITIES_STATES,
+                Request::EntitiesStates,
+                u,
+            ),
+            si::request_stream(
+                &self.set_entity_state,
+                names::SET_ENTITY_STATE,
+                Request::SetEntityState,
+                u,
+            ),
+            si::request_stream(
+                &self.entity_bounds,
+                names::GET_ENTITY_BOUNDS,
+                Request::EntityBounds,
+                u,
+            ),
+            si::request_stream(
+                &self.spawn,
+                names::SPAWN_ENTITY,
+                |id, _| Request::Spawn(id),
+                u,
+            ),
+            si::request_stream(
+                &self.delete,
+                names::DELETE_ENTITY,
+                |id, _| Request::Delete(id),
+                u,
+            ),
+            si::request_stream(
+                self.steps.goal_service(),
+                names::SIMULATE_STEPS,
+                Request::StepsGoal,
+                u,
+            ),
+            si::request_stream(
+                self.steps.cancel_service(),
+                names::SIMULATE_STEPS,
+                Request::StepsCancel,
+                u,
+            ),
+            si::request_stream(
+                self.steps.result_service(),
+                names::SIMULATE_STEPS,
+                Request::StepsResult,
+                u,
+            ),
         ])
     }
 }
@@ -157,7 +226,13 @@ impl Sim {
                 let response = srv::GetSimulatorFeaturesResponse {
                     features: si::features(),
                 };
-                si::reply(&s.features, id, response, names::GET_SIMULATOR_FEATURES, log);
+                si::reply(
+                    &s.features,
+                    id,
+                    response,
+                    names::GET_SIMULATOR_FEATURES,
+                    log,
+                );
             }
             Request::GetState(id) => {
                 let response = srv::GetSimulationStateResponse {
@@ -175,7 +250,13 @@ impl Sim {
             }
             Request::Step(id, req) => {
                 let result = self.step_simulation(servers, req.steps, log);
-                si::reply(&s.step, id, srv::StepSimulationResponse { result }, names::STEP_SIMULATION, log);
+                si::reply(
+                    &s.step,
+                    id,
+                    srv::StepSimulationResponse { result },
+                    names::STEP_SIMULATION,
+                    log,
+                );
             }
             Request::Entities(id, req) => {
                 let response = match self.filtered(&req.filters) {
@@ -234,12 +315,24 @@ impl Sim {
                         ..Default::default()
                     },
                 };
-                si::reply(&s.entities_states, id, response, names::GET_ENTITIES_STATES, log);
+                si::reply(
+                    &s.entities_states,
+                    id,
+                    response,
+                    names::GET_ENTITIES_STATES,
+                    log,
+                );
             }
             Request::SetEntityState(id, req) => {
                 let result = self.set_entity_state(&req, log);
                 let response = srv::SetEntityStateResponse { result };
-                si::reply(&s.set_entity_state, id, response, names::SET_ENTITY_STATE, log);
+                si::reply(
+                    &s.set_entity_state,
+                    id,
+                    response,
+                    names::SET_ENTITY_STATE,
+                    log,
+                );
             }
             Request::EntityBounds(id, req) => {
                 let response = match self.entity(&req.entity).and_then(|e| entity_bounds(&e)) {
@@ -252,7 +345,13 @@ impl Sim {
                         ..Default::default()
                     },
                 };
-                si::reply(&s.entity_bounds, id, response, names::GET_ENTITY_BOUNDS, log);
+                si::reply(
+                    &s.entity_bounds,
+                    id,
+                    response,
+                    names::GET_ENTITY_BOUNDS,
+                    log,
+                );
             }
             Request::Spawn(id) => {
                 let response = srv::SpawnEntityResponse {
@@ -288,7 +387,12 @@ impl Sim {
         }
     }
 
-    fn set_simulation_state(&mut self, target: u8, si_servers: &Servers, log: &Logger) -> SimResult {
+    fn set_simulation_state(
+        &mut self,
+        target: u8,
+        si_servers: &Servers,
+        log: &Logger,
+    ) -> SimResult {
         use srv::SetSimulationStateResponse as R;
         let mode = match target {
             SimulationState::STATE_PLAYING => Mode::Realtime,
@@ -330,7 +434,14 @@ impl Sim {
                 "the simulation was set to PLAYING after {} of {} steps",
                 goal.done, goal.total
             );
-            self.end_steps_goal(&si_servers.steps, goal.id, GoalStatusEnum::Aborted, SimResult::RESULT_INCORRECT_STATE, message, log);
+            self.end_steps_goal(
+                &si_servers.steps,
+                goal.id,
+                GoalStatusEnum::Aborted,
+                SimResult::RESULT_INCORRECT_STATE,
+                message,
+                log,
+            );
         }
         // Through the parameter, so `ros2 param get` agrees; its change (handled next, before any
         // other request) sets the realtime timer.
@@ -338,11 +449,18 @@ impl Sim {
             Mode::Lockstep => "lockstep",
             Mode::Realtime => "realtime",
         };
-        if let Err(err) = self.parameters.set("mode", ParameterValue::String(value.into())) {
+        if let Err(err) = self
+            .parameters
+            .set("mode", ParameterValue::String(value.into()))
+        {
             return failed(R::STATE_TRANSITION_ERROR, err);
         }
         self.mode = mode;
-        log.info(format!("{}: now {}", names::SET_SIMULATION_STATE, state_name(target)));
+        log.info(format!(
+            "{}: now {}",
+            names::SET_SIMULATION_STATE,
+            state_name(target)
+        ));
         ok()
     }
 
@@ -386,14 +504,17 @@ impl Sim {
         for done in 0..steps {
             if let Err(NoStep::Refused(mut result)) = self.may_step() {
                 if done > 0 {
-                    result.error_message = format!("{} of {steps} steps done: {}", done, result.error_message);
+                    result.error_message =
+                        format!("{} of {steps} steps done: {}", done, result.error_message);
                 }
                 return result;
             }
             if !self.advance(servers, Advance::Command, log) {
                 return failed(
                     SimResult::RESULT_OPERATION_FAILED,
-                    format!("{done} of {steps} steps done: the sim refused the held command (see its log)"),
+                    format!(
+                        "{done} of {steps} steps done: the sim refused the held command (see its log)"
+                    ),
                 );
             }
         }
@@ -408,7 +529,10 @@ impl Sim {
         log: &Logger,
     ) {
         let now = convert::time_from_nanos(self.sim_time_ns);
-        if let Err(err) = self.steps_goals.accept(server, request_id, request.goal_id, &now) {
+        if let Err(err) = self
+            .steps_goals
+            .accept(server, request_id, request.goal_id, &now)
+        {
             log.warn(err);
             return;
         }
@@ -434,7 +558,14 @@ impl Sim {
         match refused {
             Some(result) => {
                 let message = result.error_message.clone();
-                self.end_steps_goal(server, request.goal_id, GoalStatusEnum::Aborted, result.result, message, log);
+                self.end_steps_goal(
+                    server,
+                    request.goal_id,
+                    GoalStatusEnum::Aborted,
+                    result.result,
+                    message,
+                    log,
+                );
             }
             None => {
                 self.steps_running = Some(StepsGoal {
@@ -454,7 +585,12 @@ impl Sim {
     }
 
     /// One step of the running `simulate_steps` goal, its feedback, and its end when done.
-    pub(super) fn simulate_step(&mut self, servers: &ActionServers, si_servers: &Servers, log: &Logger) {
+    pub(super) fn simulate_step(
+        &mut self,
+        servers: &ActionServers,
+        si_servers: &Servers,
+        log: &Logger,
+    ) {
         let Some(mut goal) = self.steps_running.take() else {
             return;
         };
@@ -464,12 +600,29 @@ impl Sim {
                 "{} of {} steps done: a new episode started",
                 goal.done, goal.total
             );
-            self.end_steps_goal(server, goal.id, GoalStatusEnum::Aborted, SimResult::RESULT_INCORRECT_STATE, message, log);
+            self.end_steps_goal(
+                server,
+                goal.id,
+                GoalStatusEnum::Aborted,
+                SimResult::RESULT_INCORRECT_STATE,
+                message,
+                log,
+            );
             return;
         }
         if let Err(NoStep::Refused(result)) = self.may_step() {
-            let message = format!("{} of {} steps done: {}", goal.done, goal.total, result.error_message);
-            self.end_steps_goal(server, goal.id, GoalStatusEnum::Aborted, result.result, message, log);
+            let message = format!(
+                "{} of {} steps done: {}",
+                goal.done, goal.total, result.error_message
+            );
+            self.end_steps_goal(
+                server,
+                goal.id,
+                GoalStatusEnum::Aborted,
+                result.result,
+                message,
+                log,
+            );
             return;
         }
         if !self.advance(servers, Advance::Command, log) {
@@ -477,7 +630,14 @@ impl Sim {
                 "{} of {} steps done: the sim refused the held command (see its log)",
                 goal.done, goal.total
             );
-            self.end_steps_goal(server, goal.id, GoalStatusEnum::Aborted, SimResult::RESULT_OPERATION_FAILED, message, log);
+            self.end_steps_goal(
+                server,
+                goal.id,
+                GoalStatusEnum::Aborted,
+                SimResult::RESULT_OPERATION_FAILED,
+                message,
+                log,
+            );
             return;
         }
         goal.done += 1;
@@ -486,10 +646,20 @@ impl Sim {
             remaining_steps: goal.total - goal.done,
         };
         if let Err(err) = server.send_feedback(goal.id, feedback) {
-            log.warn(format!("{} feedback not sent: {err:?}", names::SIMULATE_STEPS));
+            log.warn(format!(
+                "{} feedback not sent: {err:?}",
+                names::SIMULATE_STEPS
+            ));
         }
         if goal.done == goal.total {
-            self.end_steps_goal(server, goal.id, GoalStatusEnum::Succeeded, SimResult::RESULT_OK, String::new(), log);
+            self.end_steps_goal(
+                server,
+                goal.id,
+                GoalStatusEnum::Succeeded,
+                SimResult::RESULT_OK,
+                String::new(),
+                log,
+            );
         } else {
             self.steps_running = Some(goal);
         }
@@ -511,7 +681,14 @@ impl Sim {
         }
         for goal in ended {
             let message = format!("canceled after {} of {} steps", goal.done, goal.total);
-            self.end_steps_goal(server, goal.id, GoalStatusEnum::Canceled, SimResult::RESULT_OK, message, log);
+            self.end_steps_goal(
+                server,
+                goal.id,
+                GoalStatusEnum::Canceled,
+                SimResult::RESULT_OK,
+                message,
+                log,
+            );
         }
     }
 
@@ -525,8 +702,13 @@ impl Sim {
         log: &Logger,
     ) {
         match status {
-            GoalStatusEnum::Succeeded => log.debug(format!("{} goal succeeded", names::SIMULATE_STEPS)),
-            _ => log.info(format!("{} goal {status:?}: {message}", names::SIMULATE_STEPS)),
+            GoalStatusEnum::Succeeded => {
+                log.debug(format!("{} goal succeeded", names::SIMULATE_STEPS))
+            }
+            _ => log.info(format!(
+                "{} goal {status:?}: {message}",
+                names::SIMULATE_STEPS
+            )),
         }
         let result = SimulateStepsResult {
             result: failed(code, message),
@@ -577,7 +759,10 @@ impl Sim {
             Some(regex::Regex::new(&filters.filter).map_err(|e| {
                 failed(
                     SimResult::RESULT_OPERATION_FAILED,
-                    format!("filter `{}` is not a valid regular expression: {e}", filters.filter),
+                    format!(
+                        "filter `{}` is not a valid regular expression: {e}",
+                        filters.filter
+                    ),
                 )
             })?)
         };
@@ -587,7 +772,10 @@ impl Sim {
             .filter(|e| regex.as_ref().is_none_or(|r| r.is_match(e.name)))
             .filter(|e| {
                 filters.categories.is_empty()
-                    || filters.categories.iter().any(|c| c.category == e.category())
+                    || filters
+                        .categories
+                        .iter()
+                        .any(|c| c.category == e.category())
             })
             .filter(|e| si::tags_match(&filters.tags, &e.tags))
             .collect())
@@ -640,7 +828,9 @@ impl Sim {
         if !frame.is_empty() && frame != names::WORLD_FRAME {
             return failed(
                 R::INVALID_POSE,
-                format!("frame `{frame}` is not known here; give the state in `world` (or leave frame_id empty)"),
+                format!(
+                    "frame `{frame}` is not known here; give the state in `world` (or leave frame_id empty)"
+                ),
             );
         }
         let p = &req.state.pose;
@@ -657,11 +847,17 @@ impl Sim {
         }
         let pose = nalgebra::Isometry3::from_parts(
             nalgebra::Translation3::new(p.position.x, p.position.y, p.position.z),
-            nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q.w, q.x, q.y, q.z)),
+            nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                q.w, q.x, q.y, q.z,
+            )),
         );
         let v = |v: &Vector3| nalgebra::Vector3::new(v.x, v.y, v.z);
         let run = self.run.as_mut().expect("checked by entity()");
-        match run.env.set_object_state(&pose, &v(&req.state.twist.linear), &v(&req.state.twist.angular)) {
+        match run.env.set_object_state(
+            &pose,
+            &v(&req.state.twist.linear),
+            &v(&req.state.twist.angular),
+        ) {
             Ok(()) => {
                 log.info(format!(
                     "{}: object at ({:.3}, {:.3}, {:.3}) m; the next step's observation and reward follow",
@@ -671,9 +867,16 @@ impl Sim {
                     p.position.z
                 ));
                 let a = &req.state.acceleration;
-                if [a.linear.x, a.linear.y, a.linear.z, a.angular.x, a.angular.y, a.angular.z]
-                    .iter()
-                    .any(|x| *x != 0.0)
+                if [
+                    a.linear.x,
+                    a.linear.y,
+                    a.linear.z,
+                    a.angular.x,
+                    a.angular.y,
+                    a.angular.z,
+                ]
+                .iter()
+                .any(|x| *x != 0.0)
                 {
                     return failed(
                         SimResult::RESULT_OK,

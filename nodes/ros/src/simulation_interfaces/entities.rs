@@ -77,12 +77,15 @@ impl Entity {
     /// The axis-aligned box (min, max corner) around its solids in its own body frame, or
     /// `None` for the arm, whose extent changes with its joints.
     pub fn bounds(&self) -> Option<(Point3<f64>, Point3<f64>)> {
-        self.parts.iter().map(Placed::aabb).reduce(|(lo, hi), (l, h)| {
-            (
-                Point3::from(lo.coords.inf(&l.coords)),
-                Point3::from(hi.coords.sup(&h.coords)),
-            )
-        })
+        self.parts
+            .iter()
+            .map(Placed::aabb)
+            .reduce(|(lo, hi), (l, h)| {
+                (
+                    Point3::from(lo.coords.inf(&l.coords)),
+                    Point3::from(hi.coords.sup(&h.coords)),
+                )
+            })
     }
 }
 

@@ -3,7 +3,8 @@
 //! termination, the horizon) and publishes `episode`; serves `set_task`, `reset` and
 //! `sample_tasks`.
 //!
-//! Also serves its part of the ROS 2 standard simulation interfaces ([`simulation_services`]):
+//! Also serves its part of the ROS 2 standard simulation interfaces
+//! ([`crate::simulation_interfaces`]):
 //! `reset_simulation`, `get_available_worlds`, `load_world`, `get_current_world`, `unload_world`.
 //!
 //! `reset` answers with the episode's first observation: it publishes the new scene and replies
@@ -552,9 +553,10 @@ impl Replies<'_> {
         use composuite_msgs::simulation_interfaces::srv as si_srv;
         let result = match &outcome {
             Ok(_) => crate::simulation_interfaces::ok(),
-            Err(why) => {
-                crate::simulation_interfaces::failed(SimResult::RESULT_OPERATION_FAILED, why.clone())
-            }
+            Err(why) => crate::simulation_interfaces::failed(
+                SimResult::RESULT_OPERATION_FAILED,
+                why.clone(),
+            ),
         };
         let sent = match &p.waiting {
             Waiting::Reset => {
@@ -568,7 +570,9 @@ impl Replies<'_> {
                     },
                     Err(why) => failed_reset(why),
                 };
-                self.reset.send_response(p.request, response).map_err(|e| format!("{e:?}"))
+                self.reset
+                    .send_response(p.request, response)
+                    .map_err(|e| format!("{e:?}"))
             }
             Waiting::ResetSimulation => self
                 .si

@@ -61,10 +61,25 @@ impl Servers {
         let u = Request::Unreadable;
         futures::stream::select_all([
             si::request_stream(&self.reset, names::RESET_SIMULATION, Request::Reset, u),
-            si::request_stream(&self.available, names::GET_AVAILABLE_WORLDS, Request::Available, u),
+            si::request_stream(
+                &self.available,
+                names::GET_AVAILABLE_WORLDS,
+                Request::Available,
+                u,
+            ),
             si::request_stream(&self.load, names::LOAD_WORLD, Request::Load, u),
-            si::request_stream(&self.current, names::GET_CURRENT_WORLD, |id, _| Request::Current(id), u),
-            si::request_stream(&self.unload, names::UNLOAD_WORLD, |id, _| Request::Unload(id), u),
+            si::request_stream(
+                &self.current,
+                names::GET_CURRENT_WORLD,
+                |id, _| Request::Current(id),
+                u,
+            ),
+            si::request_stream(
+                &self.unload,
+                names::UNLOAD_WORLD,
+                |id, _| Request::Unload(id),
+                u,
+            ),
         ])
     }
 }
@@ -76,7 +91,13 @@ impl TaskManager {
         match request {
             Request::Reset(id, req) => {
                 if let Err(result) = self.reset_simulation(id, req.scope, log) {
-                    si::reply(&s.reset, id, srv::ResetSimulationResponse { result }, names::RESET_SIMULATION, log);
+                    si::reply(
+                        &s.reset,
+                        id,
+                        srv::ResetSimulationResponse { result },
+                        names::RESET_SIMULATION,
+                        log,
+                    );
                 }
             }
             Request::Available(id, req) => {
@@ -122,7 +143,12 @@ impl TaskManager {
     /// SCOPE_STATE (SCOPE_DEFAULT and SCOPE_ALL do). Sim time is not reset: every stamp of a
     /// run is unique (recordings, tf buffers and the restart check rely on it); the episode's
     /// step count starts again at 0.
-    fn reset_simulation(&mut self, id: RmwRequestId, scope: u8, log: &Logger) -> Result<(), SimResult> {
+    fn reset_simulation(
+        &mut self,
+        id: RmwRequestId,
+        scope: u8,
+        log: &Logger,
+    ) -> Result<(), SimResult> {
         use srv::ResetSimulationRequest as R;
         let resets_state = scope == R::SCOPE_DEFAULT || scope & R::SCOPE_STATE != 0;
         if !resets_state {
@@ -138,7 +164,10 @@ impl TaskManager {
         }
         match self.start_episode(None) {
             Ok((episode, seed)) => {
-                log.info(format!("{}: episode {episode}, seed {seed}", names::RESET_SIMULATION));
+                log.info(format!(
+                    "{}: episode {episode}, seed {seed}",
+                    names::RESET_SIMULATION
+                ));
                 self.wait_for_start(id, episode, seed, Waiting::ResetSimulation);
                 Ok(())
             }
@@ -147,7 +176,12 @@ impl TaskManager {
     }
 
     /// `set_task` of the task the uri names; answered when its first observation arrives.
-    fn load_world(&mut self, id: RmwRequestId, req: &srv::LoadWorldRequest, log: &Logger) -> Result<(), SimResult> {
+    fn load_world(
+        &mut self,
+        id: RmwRequestId,
+        req: &srv::LoadWorldRequest,
+        log: &Logger,
+    ) -> Result<(), SimResult> {
         use srv::LoadWorldResponse as R;
         if req.uri.is_empty() {
             return Err(if req.resource_string.is_empty() {
@@ -178,7 +212,10 @@ impl TaskManager {
         self.task = task;
         match self.start_episode(None) {
             Ok((episode, seed)) => {
-                log.info(format!("{}: {task} (episode {episode}, seed {seed})", names::LOAD_WORLD));
+                log.info(format!(
+                    "{}: {task} (episode {episode}, seed {seed})",
+                    names::LOAD_WORLD
+                ));
                 self.wait_for_start(id, episode, seed, Waiting::LoadWorld(task));
                 Ok(())
             }
@@ -205,7 +242,10 @@ fn available_worlds(req: &srv::GetAvailableWorldsRequest) -> srv::GetAvailableWo
         };
     }
     match worlds::available(&req.filter) {
-        Ok(worlds) => srv::GetAvailableWorldsResponse { result: ok(), worlds },
+        Ok(worlds) => srv::GetAvailableWorldsResponse {
+            result: ok(),
+            worlds,
+        },
         Err(why) => srv::GetAvailableWorldsResponse {
             result: failed(SimResult::RESULT_OPERATION_FAILED, why),
             ..Default::default()
