@@ -3,7 +3,8 @@ process on one DDS participant. Checked with real rclpy on Fast DDS: the nine no
 nodes in the graph (`ros2 node list`), no node process exists (the launcher's threads are the
 nodes), each environment steps bit-identical to the in-process env, and a node that fails (the
 sim's `fault_panic` parameter) takes down only its environment, which launch starts again
-while the others go on stepping."""
+while the others go on stepping. The standard simulation interfaces (simulation_interfaces) answer
+in every environment's namespace as they do for separate processes."""
 
 from __future__ import annotations
 
@@ -58,6 +59,35 @@ def test_every_node_is_a_ros_node_in_the_graph(suite):
         for ns in NAMESPACES:
             assert services[f"{ns}/reset"] == ["composuite_msgs/srv/Reset"]
             assert f"{ns}/sim/set_parameters" in services
+    finally:
+        agent.close()
+
+
+def test_the_standard_simulation_interfaces_answer_in_every_environment(suite):
+    from simulation_interfaces.msg import Result, SimulationState
+    from simulation_interfaces.srv import (GetCurrentWorld, GetEntityState, GetSimulationState,
+                                           GetSimulatorFeatures, StepSimulation)
+    agent = RclpyAgent(suite.domain)
+    try:
+        for ns in NAMESPACES:
+            client = lambda t, name: agent.node.create_client(t, f"{ns}/{name}")  # noqa: E731
+            features = agent.call(client(GetSimulatorFeatures, "get_simulator_features"),
+                                  GetSimulatorFeatures.Request()).features
+            assert "CompoSuite-ROS" in features.custom_info and len(features.features) > 10
+            state = agent.call(client(GetSimulationState, "get_simulation_state"), GetSimulationState.Request())
+            assert state.state.state == SimulationState.STATE_PAUSED
+            world = agent.call(client(GetCurrentWorld, "get_current_world"), GetCurrentWorld.Request())
+            assert world.world.name == TASK
+            entity = client(GetEntityState, "get_entity_state")
+            before = agent.call(entity, GetEntityState.Request(entity="object")).state.header.stamp
+            step = client(StepSimulation, "step_simulation")
+            # A refused request first (0 steps) so that this client's replies are matched: the
+            # stepping call below is then sent once.
+            assert agent.call(step, StepSimulation.Request(steps=0)).result.result == Result.RESULT_OPERATION_FAILED
+            done = agent.call(step, StepSimulation.Request(steps=3), attempt=10.0)
+            assert done.result.result == Result.RESULT_OK, done.result.error_message
+            after = agent.call(entity, GetEntityState.Request(entity="object")).state.header.stamp
+            assert node_suite.ns_of(after) - node_suite.ns_of(before) == 3 * 50_000_000, ns
     finally:
         agent.close()
 

@@ -409,3 +409,53 @@ fn sparse_and_scaled_rewards_follow_the_staged_ones() {
         assert_eq!(c.0, 2.5 * a.0, "scaled");
     }
 }
+
+/// `Env::set_object_state` teleports the object: the next step starts from there, and bad
+/// states are refused before anything moves.
+#[test]
+fn set_object_state_moves_the_object_and_refuses_bad_states() {
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+    let mut env = env("IIWA/box/no_obstacle/pick_place");
+    let at = Isometry3::from_parts(
+        Translation3::new(0.05, 0.2, 0.95),
+        UnitQuaternion::identity(),
+    );
+    let zero = Vector3::zeros();
+    assert!(
+        env.set_object_state(&at, &zero, &zero)
+            .unwrap_err()
+            .contains("reset")
+    );
+    env.reset(1).unwrap();
+    let start = env.world_state().object_pose;
+    let far = Isometry3::translation(10.0, 0.0, 1.0);
+    assert!(
+        env.set_object_state(&far, &zero, &zero)
+            .unwrap_err()
+            .contains("outside")
+    );
+    let nan = Vector3::new(f64::NAN, 0.0, 0.0);
+    assert!(
+        env.set_object_state(&at, &nan, &zero)
+            .unwrap_err()
+            .contains("non-finite")
+    );
+    assert_eq!(
+        env.world_state().object_pose,
+        start,
+        "a refused state moves nothing"
+    );
+
+    env.set_object_state(&at, &Vector3::new(0.0, 0.0, 0.5), &zero)
+        .unwrap();
+    let now = env.world_state();
+    assert!((now.object_pose.translation.vector - at.translation.vector).norm() < 1e-6);
+    assert!((now.object_linear_velocity.z - 0.5).abs() < 1e-6);
+    let before = env.observation().flat();
+    env.step(&Action::Reference([0.0; 8])).unwrap();
+    let after = env.world_state().object_pose.translation.vector;
+    // Thrown up at 0.5 m/s from 0.95 m: higher after one 50 ms period, far from its start.
+    assert!(after.z > 0.95, "{after:?}");
+    assert!((after - start.translation.vector).norm() > 0.1);
+    assert_ne!(before, env.observation().flat());
+}

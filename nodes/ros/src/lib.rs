@@ -6,6 +6,8 @@
 //! - [`reward`]: staged rewards and success;
 //! - [`recorder`]: records the wire into a rosbag2 bag;
 //! - [`player`]: plays a bag back into a running graph (`composuite bag play`);
+//! - [`simulation_interfaces`]: the ROS 2 standard simulation interfaces (which node serves
+//!   what, entities, worlds);
 //! - [`container`]: many environments' nodes in one process on one participant;
 //! - [`nodes`]: the nodes by kind (specs and mains, for the binaries and `composuite launch`);
 //! - [`shared`]: start-up, parameters, logging, names, QoS, message conversions;
@@ -20,4 +22,5 @@ pub mod recorder;
 pub mod reward;
 pub mod shared;
 pub mod sim;
+pub mod simulation_interfaces;
 pub mod task_manager;

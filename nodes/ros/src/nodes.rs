@@ -77,7 +77,8 @@ const SIM: NodeSpec = NodeSpec {
     about: "CompoSuite-ROS sim node: owns the physics world of one environment; steps it on \
             joint_command or reference_action (lockstep) or on the wall clock (realtime); \
             publishes joint_states, observation, world_state, clock, tf (every link), \
-            tf_static, robot_description, scene_markers and object_markers.",
+            tf_static, robot_description, scene_markers and object_markers; serves the \
+            standard simulation interfaces' state, stepping and entity services.",
     params: crate::sim::PARAMS,
 };
 
@@ -86,7 +87,7 @@ const TASK_MANAGER: NodeSpec = NodeSpec {
     binary: "task_manager_node",
     about: "CompoSuite-ROS task manager node: composes and publishes the scene (one per \
             episode), follows episodes and publishes episode; serves set_task, reset and \
-            sample_tasks.",
+            sample_tasks, and the standard simulation interfaces' reset and world services.",
     params: crate::task_manager::PARAMS,
 };
 

@@ -467,6 +467,42 @@ impl Env {
         self.world.set_object_torque(torque);
     }
 
+    /// Teleport the object: `pose` (world), linear (m/s) and angular (rad/s) velocity, as a
+    /// curriculum or a demonstration start sets it. The next [`Env::step`] simulates from there,
+    /// so its observation and reward follow the new state; an episode changed this way is not
+    /// reproducible from its actions alone. Refused before the first reset, for a non-finite
+    /// value, a quaternion that is not of unit length, or a position outside the ground.
+    pub fn set_object_state(
+        &mut self,
+        pose: &Isometry3<f64>,
+        linear: &Vector3<f64>,
+        angular: &Vector3<f64>,
+    ) -> Result<(), String> {
+        if self.phase == Phase::NotReset {
+            return Err("no episode yet: reset first".into());
+        }
+        let t = pose.translation.vector;
+        let q = pose.rotation.quaternion().coords;
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !finite(t.as_slice()) || !finite(q.as_slice()) {
+            return Err(format!("the pose has a non-finite value: {t:?}, {q:?}"));
+        }
+        if !finite(linear.as_slice()) || !finite(angular.as_slice()) {
+            return Err(format!(
+                "a velocity has a non-finite value: {linear:?}, {angular:?}"
+            ));
+        }
+        let [hx, hy] = crate::arena::GROUND_HALF_SIZE;
+        if t.x.abs() > hx || t.y.abs() > hy || t.z < 0.0 {
+            return Err(format!(
+                "position ({:.3}, {:.3}, {:.3}) m is outside the world: |x| <= {hx}, |y| <= {hy}, z >= 0",
+                t.x, t.y, t.z
+            ));
+        }
+        self.world.set_object_motion(pose, linear, angular);
+        Ok(())
+    }
+
     /// The simulated world (read only; commands go through [`Env::step`]).
     pub fn world(&self) -> &SimWorld {
         &self.world

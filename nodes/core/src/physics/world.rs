@@ -704,6 +704,21 @@ impl SimWorld {
         }
     }
 
+    /// Move the object to `pose` with velocities `linear` (m/s) and `angular` (rad/s), world
+    /// frame — a teleport, as a simulator's "set entity state" does.
+    pub fn set_object_motion(
+        &mut self,
+        pose: &Isometry3<f64>,
+        linear: &Vector3<f64>,
+        angular: &Vector3<f64>,
+    ) {
+        if let Some(body) = self.object.and_then(|h| self.physics.bodies.get_mut(h)) {
+            body.set_position(to_pose(pose), true);
+            body.set_linvel(to_vec(linear), true);
+            body.set_angvel(to_vec(angular), true);
+        }
+    }
+
     /// Hold a torque (N·m, world frame) on the object about its centre of mass until it is
     /// changed — MuJoCo's `xfrc_applied`, for test rigs and disturbance studies.
     pub fn set_object_torque(&mut self, torque: Vector3<f64>) {

@@ -72,3 +72,44 @@ pub const GRIPPER_ACTION: &str = "gripper_action_controller/gripper_cmd";
 pub const LIST_CONTROLLERS: &str = "controller_manager/list_controllers";
 /// Service `controller_manager_msgs/srv/ListHardwareInterfaces`.
 pub const LIST_HARDWARE_INTERFACES: &str = "controller_manager/list_hardware_interfaces";
+
+// The ROS 2 standard simulation interfaces (simulation_interfaces, Jazzy), named as Gazebo and
+// Isaac Sim name them, without a prefix; the table in crate::simulation_interfaces says which
+// node serves each and what it maps to.
+
+/// Service `simulation_interfaces/srv/GetSimulatorFeatures`.
+pub const GET_SIMULATOR_FEATURES: &str = "get_simulator_features";
+/// Service `simulation_interfaces/srv/GetSimulationState`.
+pub const GET_SIMULATION_STATE: &str = "get_simulation_state";
+/// Service `simulation_interfaces/srv/SetSimulationState`.
+pub const SET_SIMULATION_STATE: &str = "set_simulation_state";
+/// Service `simulation_interfaces/srv/StepSimulation`.
+pub const STEP_SIMULATION: &str = "step_simulation";
+/// Action `simulation_interfaces/action/SimulateSteps`.
+pub const SIMULATE_STEPS: &str = "simulate_steps";
+/// Service `simulation_interfaces/srv/ResetSimulation`.
+pub const RESET_SIMULATION: &str = "reset_simulation";
+/// Service `simulation_interfaces/srv/GetEntities`.
+pub const GET_ENTITIES: &str = "get_entities";
+/// Service `simulation_interfaces/srv/GetEntityInfo`.
+pub const GET_ENTITY_INFO: &str = "get_entity_info";
+/// Service `simulation_interfaces/srv/GetEntityState`.
+pub const GET_ENTITY_STATE: &str = "get_entity_state";
+/// Service `simulation_interfaces/srv/GetEntitiesStates`.
+pub const GET_ENTITIES_STATES: &str = "get_entities_states";
+/// Service `simulation_interfaces/srv/SetEntityState`.
+pub const SET_ENTITY_STATE: &str = "set_entity_state";
+/// Service `simulation_interfaces/srv/GetEntityBounds`.
+pub const GET_ENTITY_BOUNDS: &str = "get_entity_bounds";
+/// Service `simulation_interfaces/srv/SpawnEntity` (answered: unsupported).
+pub const SPAWN_ENTITY: &str = "spawn_entity";
+/// Service `simulation_interfaces/srv/DeleteEntity` (answered: unsupported).
+pub const DELETE_ENTITY: &str = "delete_entity";
+/// Service `simulation_interfaces/srv/GetAvailableWorlds`.
+pub const GET_AVAILABLE_WORLDS: &str = "get_available_worlds";
+/// Service `simulation_interfaces/srv/LoadWorld`.
+pub const LOAD_WORLD: &str = "load_world";
+/// Service `simulation_interfaces/srv/GetCurrentWorld`.
+pub const GET_CURRENT_WORLD: &str = "get_current_world";
+/// Service `simulation_interfaces/srv/UnloadWorld` (answered: unsupported).
+pub const UNLOAD_WORLD: &str = "unload_world";

@@ -14,6 +14,9 @@
 //!   `joint_trajectory_controller/{follow_joint_trajectory,joint_trajectory}`,
 //!   `forward_position_controller/commands`, `gripper_action_controller/gripper_cmd`, and
 //!   `controller_manager/{list_controllers,list_hardware_interfaces}`;
+//! - its part of the ROS 2 standard simulation interfaces ([`crate::simulation_interfaces`]):
+//!   features, simulation state (lockstep = PAUSED, realtime = PLAYING), `step_simulation` and
+//!   the `simulate_steps` action (each step taken as a lockstep command's step), entities;
 //! - every period runs read → update → write on one timestamp through the [`hardware`] seam;
 //! - `lockstep` mode: each `joint_command`, reference action or forward command advances exactly
 //!   one control period; a trajectory or gripper goal (or topic trajectory) advances the sim
@@ -32,9 +35,11 @@ pub mod action_server;
 pub mod controllers;
 pub mod hardware;
 pub mod ros_control;
+mod simulation_services;
 pub mod view;
 
 use std::collections::BTreeSet;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use composuite_core::TaskSpec;
@@ -70,6 +75,7 @@ use self::hardware::{ArmCommand, GripperTarget, Hardware, JointSnapshot, SimHard
 use crate::shared::convert;
 use crate::shared::names;
 use crate::shared::node::{Logger, ParamChange, RosNode};
+use crate::shared::param_server::Parameters;
 use crate::shared::params::{ParamSpec, any_value, positive_number};
 use crate::shared::qos;
 
@@ -263,6 +269,11 @@ struct Sim {
     up: Vec<Controller>,
     trajectory_goals: Goals<FollowJointTrajectoryResult>,
     gripper_goals: Goals<GripperCommandResult>,
+    /// The node's parameters (`set_simulation_state` sets `mode` through them).
+    parameters: Arc<Parameters>,
+    /// `simulate_steps` goals, and the one being executed.
+    steps_goals: Goals<composuite_msgs::simulation_interfaces::action::SimulateStepsResult>,
+    steps_running: Option<simulation_services::StepsGoal>,
 }
 
 /// A subscription's stream, or a stream that never yields when the topic is not offered.
@@ -377,6 +388,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let list_interfaces = node
         .server::<ListHardwareInterfaces>(names::LIST_HARDWARE_INTERFACES)
         .map_err(e)?;
+    let si_servers = simulation_services::Servers::new(node).map_err(e)?;
     let mut sim = Sim {
         mode: Mode::parse(&node.param_string("mode")).unwrap_or(Mode::Lockstep),
         realtime_factor: node.param_f64("realtime_factor"),
@@ -388,6 +400,9 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         up,
         trajectory_goals: Goals::default(),
         gripper_goals: Goals::default(),
+        parameters: Arc::clone(&node.parameters),
+        steps_goals: Goals::default(),
+        steps_running: None,
     };
     let log = node.log.clone();
     log.info(format!(
@@ -432,11 +447,14 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         ));
         let mut controller_lists = std::pin::pin!(list_controllers.receive_request_stream());
         let mut interface_lists = std::pin::pin!(list_interfaces.receive_request_stream());
+        let mut simulation_requests = std::pin::pin!(si_servers.requests());
         let mut ticker = sim.ticker();
         loop {
-            // In lockstep a running goal advances the sim, after every waiting event is handled.
+            // In lockstep a running goal (a controller's or simulate_steps') advances the sim,
+            // after every waiting event is handled.
             let goal_wants_time = sim.mode == Mode::Lockstep
-                && sim.run.as_ref().is_some_and(|r| r.controllers.running());
+                && (sim.steps_goal_running()
+                    || sim.run.as_ref().is_some_and(|r| r.controllers.running()));
             let goal_step = async {
                 if goal_wants_time {
                     smol::future::yield_now().await
@@ -556,8 +574,19 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                         names::REFERENCE_ACTION_STAMPED
                     )),
                 },
-                _ = ticker.next().fuse() => sim.advance(servers, Advance::Command, &log),
-                _ = goal_step.fuse() => sim.advance(servers, Advance::Goal, &log),
+                _ = ticker.next().fuse() => {
+                    sim.advance(servers, Advance::Command, &log);
+                }
+                request = simulation_requests.select_next_some() => {
+                    sim.on_simulation_request(servers, &si_servers, request, &log);
+                }
+                _ = goal_step.fuse() => {
+                    if sim.steps_goal_running() {
+                        sim.simulate_step(servers, &si_servers, &log);
+                    } else {
+                        sim.advance(servers, Advance::Goal, &log);
+                    }
+                }
             }
         }
     })
@@ -1172,10 +1201,13 @@ impl Sim {
     /// One control period in ros2_control's order: read the hardware, update the controllers on
     /// that reading, write their commands (the world simulates the period). Advanced by a goal,
     /// the period is simulated only if a goal is still undecided after the update: an N-period
-    /// trajectory takes exactly N steps, like N `joint_command`s.
-    fn advance(&mut self, servers: &ActionServers, by: Advance, log: &Logger) {
+    /// trajectory takes exactly N steps, like N `joint_command`s. True when a period was
+    /// simulated and published.
+    fn advance(&mut self, servers: &ActionServers, by: Advance, log: &Logger) -> bool {
         let time_ns = self.sim_time_ns;
-        let Some(run) = &mut self.run else { return };
+        let Some(run) = &mut self.run else {
+            return false;
+        };
         let period_ns = Self::period_ns(run);
         let started = Instant::now();
         let mut hardware = SimHardware::new(&mut run.env, time_ns);
@@ -1189,7 +1221,7 @@ impl Sim {
         });
         let physics = started.elapsed();
         self.report(servers, events, log);
-        let Some(step) = step else { return };
+        let Some(step) = step else { return false };
         let run = self.run.as_mut().expect("checked above");
         match step {
             Ok(step) => {
@@ -1238,12 +1270,12 @@ impl Sim {
                     run.over_reported = true;
                     log.warn(format!("command ignored: {err} (said once per episode)"));
                 }
-                return;
+                return false;
             }
             Err(err) => {
                 log.warn(format!("command refused: {err}"));
                 self.end_all_goals(servers, &format!("the sim refused a command: {err}"), log);
-                return;
+                return false;
             }
         }
         self.advance_clock();
@@ -1261,6 +1293,7 @@ impl Sim {
             ));
             *t = StepTiming::default();
         }
+        true
     }
 
     fn advance_clock(&mut self) {

@@ -3,8 +3,14 @@
 //! termination, the horizon) and publishes `episode`; serves `set_task`, `reset` and
 //! `sample_tasks`.
 //!
+//! Also serves its part of the ROS 2 standard simulation interfaces
+//! ([`crate::simulation_interfaces`]):
+//! `reset_simulation`, `get_available_worlds`, `load_world`, `get_current_world`, `unload_world`.
+//!
 //! `reset` answers with the episode's first observation: it publishes the new scene and replies
 //! when the sim's step-0 observation of that episode arrives (or says the sim did not answer).
+
+mod simulation_services;
 
 use std::time::{Duration, Instant};
 
@@ -101,12 +107,23 @@ struct Episode {
     started: bool,
 }
 
+/// Which service a reset is answered on.
+enum Waiting {
+    /// `reset` (answered with the first observation).
+    Reset,
+    /// `reset_simulation`.
+    ResetSimulation,
+    /// `load_world` of this task.
+    LoadWorld(TaskSpec),
+}
+
 /// A reset waiting for the sim's first observation.
 struct PendingReset {
     request: RmwRequestId,
     episode: u32,
     seed: u64,
     deadline: Instant,
+    waiting: Waiting,
 }
 
 struct TaskManager {
@@ -141,6 +158,11 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     let sample = node
         .server::<srv::SampleTasks>(names::SAMPLE_TASKS)
         .map_err(e)?;
+    let si_servers = simulation_services::Servers::new(node).map_err(e)?;
+    let replies = Replies {
+        reset: &reset,
+        si: &si_servers,
+    };
     let task: TaskSpec = node
         .param_string("task")
         .parse()
@@ -175,6 +197,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         let mut set_task_requests = std::pin::pin!(set_task.receive_request_stream());
         let mut reset_requests = std::pin::pin!(reset.receive_request_stream());
         let mut sample_requests = std::pin::pin!(sample.receive_request_stream());
+        let mut simulation_requests = std::pin::pin!(si_servers.requests());
         let mut timeouts = smol::Timer::interval(Duration::from_millis(100));
         loop {
             futures::select_biased! {
@@ -190,7 +213,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                     Err(err) => log.warn(format!("unreadable world_state dropped: {err:?}")),
                 },
                 observation = observations.select_next_some() => match observation {
-                    Ok((o, _)) => manager.on_observation(o, &reset, &log),
+                    Ok((o, _)) => manager.on_observation(o, &replies, &log),
                     Err(err) => log.warn(format!("unreadable observation dropped: {err:?}")),
                 },
                 request = set_task_requests.select_next_some() => match request {
@@ -220,7 +243,10 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
                     }
                     Err(err) => log.warn(format!("unreadable sample_tasks request dropped: {err:?}")),
                 },
-                _ = timeouts.next().fuse() => manager.expire_resets(&reset, &log),
+                request = simulation_requests.select_next_some() => {
+                    manager.on_simulation_request(&si_servers, request, &log);
+                }
+                _ = timeouts.next().fuse() => manager.expire_resets(&replies, &log),
             }
         }
     })
@@ -438,12 +464,7 @@ impl TaskManager {
         match self.start_episode(seed) {
             Ok((episode, seed)) => {
                 log.info(format!("reset: episode {episode}, seed {seed}"));
-                self.pending.push(PendingReset {
-                    request: id,
-                    episode,
-                    seed,
-                    deadline: Instant::now() + self.reset_timeout,
-                });
+                self.wait_for_start(id, episode, seed, Waiting::Reset);
                 None
             }
             Err(err) => {
@@ -453,7 +474,19 @@ impl TaskManager {
         }
     }
 
-    fn on_observation<S: ResetReplier>(&mut self, o: msg::Observation, server: &S, log: &Logger) {
+    /// Answer request `id` when episode `episode`'s first observation arrives (or at the
+    /// timeout).
+    fn wait_for_start(&mut self, id: RmwRequestId, episode: u32, seed: u64, waiting: Waiting) {
+        self.pending.push(PendingReset {
+            request: id,
+            episode,
+            seed,
+            deadline: Instant::now() + self.reset_timeout,
+            waiting,
+        });
+    }
+
+    fn on_observation(&mut self, o: msg::Observation, replies: &Replies, log: &Logger) {
         self.sim_time_goes_on(o.episode, o.step, &o.header.stamp);
         if o.step != 0 {
             return;
@@ -475,31 +508,22 @@ impl TaskManager {
         let mut waiting = Vec::new();
         for p in self.pending.drain(..) {
             if p.episode == o.episode {
-                let response = srv::ResetResponse {
-                    success: true,
-                    message: String::new(),
-                    episode: p.episode,
-                    seed: p.seed,
-                    observation: o.clone(),
-                };
-                if let Err(err) = server.reply(p.request, response) {
-                    log.error(format!("reset reply failed: {err}"));
-                }
+                replies.answer(&p, Ok(&o), log);
             } else if p.episode > o.episode {
                 waiting.push(p);
             } else {
                 // A newer episode superseded this reset before the sim answered it.
-                let response = failed_reset(format!(
+                let why = format!(
                     "episode {} was replaced by a newer one before it started",
                     p.episode
-                ));
-                let _ = server.reply(p.request, response);
+                );
+                replies.answer(&p, Err(why), log);
             }
         }
         self.pending = waiting;
     }
 
-    fn expire_resets<S: ResetReplier>(&mut self, server: &S, log: &Logger) {
+    fn expire_resets(&mut self, replies: &Replies, log: &Logger) {
         let now = Instant::now();
         let (expired, waiting): (Vec<_>, Vec<_>) =
             self.pending.drain(..).partition(|p| p.deadline <= now);
@@ -511,20 +535,65 @@ impl TaskManager {
                 self.reset_timeout.as_secs_f64()
             );
             log.error(&message);
-            let _ = server.reply(p.request, failed_reset(message));
+            replies.answer(&p, Err(message), log);
         }
     }
 }
 
-/// Something that can answer a reset (the server; a trait so the logic is testable).
-trait ResetReplier {
-    fn reply(&self, id: RmwRequestId, response: srv::ResetResponse) -> Result<(), String>;
+/// The servers a started (or failed) episode answers on.
+struct Replies<'a> {
+    reset: &'a Server<srv::ResetRequest, srv::ResetResponse>,
+    si: &'a simulation_services::Servers,
 }
 
-impl ResetReplier for Server<srv::ResetRequest, srv::ResetResponse> {
-    fn reply(&self, id: RmwRequestId, response: srv::ResetResponse) -> Result<(), String> {
-        self.send_response(id, response)
-            .map_err(|e| format!("{e:?}"))
+impl Replies<'_> {
+    /// Answer `p`: its episode started with first observation `o`, or did not, for a reason.
+    fn answer(&self, p: &PendingReset, outcome: Result<&msg::Observation, String>, log: &Logger) {
+        use composuite_msgs::simulation_interfaces::msg::Result as SimResult;
+        use composuite_msgs::simulation_interfaces::srv as si_srv;
+        let result = match &outcome {
+            Ok(_) => crate::simulation_interfaces::ok(),
+            Err(why) => crate::simulation_interfaces::failed(
+                SimResult::RESULT_OPERATION_FAILED,
+                why.clone(),
+            ),
+        };
+        let sent = match &p.waiting {
+            Waiting::Reset => {
+                let response = match outcome {
+                    Ok(o) => srv::ResetResponse {
+                        success: true,
+                        message: String::new(),
+                        episode: p.episode,
+                        seed: p.seed,
+                        observation: o.clone(),
+                    },
+                    Err(why) => failed_reset(why),
+                };
+                self.reset
+                    .send_response(p.request, response)
+                    .map_err(|e| format!("{e:?}"))
+            }
+            Waiting::ResetSimulation => self
+                .si
+                .reset
+                .send_response(p.request, si_srv::ResetSimulationResponse { result })
+                .map_err(|e| format!("{e:?}")),
+            Waiting::LoadWorld(task) => {
+                let world = if outcome.is_ok() {
+                    crate::simulation_interfaces::worlds::world(*task)
+                } else {
+                    Default::default()
+                };
+                self.si
+                    .load
+                    .send_response(p.request, si_srv::LoadWorldResponse { result, world })
+                    .map_err(|e| format!("{e:?}"))
+            }
+        };
+        if let Err(err) = sent {
+            log.error(format!("reply to a reset failed: {err}"));
+        }
     }
 }
 
