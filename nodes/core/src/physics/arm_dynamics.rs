@@ -69,26 +69,38 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
             axis: frame.rotation * model.joints[j].axis,
         }
     });
-    // (`robot_model` refuses models with more bodies.)
+    // The outermost arm joint that moves each body (the link it rides on); none for the base.
+    // (`robot_model` refuses models with more bodies than MAX_BODIES.)
+    let mut link_of = [None; MAX_BODIES];
+    for (j, moved) in arm.downstream.iter().enumerate().take(ARM_DOF) {
+        for &b in moved {
+            link_of[b] = Some(j);
+        }
+    }
     let bodies: [Option<WorldBody>; MAX_BODIES] = std::array::from_fn(|b| {
-        if b >= model.bodies.len() {
-            return None;
-        }
-        {
-            let link = (0..ARM_DOF)
-                .rev()
-                .find(|&j| arm.downstream[j].contains(&b))?;
-            let body = &model.bodies[b];
-            let pose = arm.body_poses[b];
-            let r = pose.rotation.to_rotation_matrix();
-            Some(WorldBody {
-                mass: body.mass,
-                com: (pose * nalgebra::Point3::from(body.com)).coords,
-                inertia: r.matrix() * body.inertia * r.matrix().transpose(),
-                link,
-            })
-        }
+        let link = link_of[b]?;
+        let body = &model.bodies[b];
+        let pose = arm.body_poses[b];
+        let r = pose.rotation.to_rotation_matrix();
+        Some(WorldBody {
+            mass: body.mass,
+            com: (pose * nalgebra::Point3::from(body.com)).coords,
+            inertia: r.matrix() * body.inertia * r.matrix().transpose(),
+            link,
+        })
     });
+
+    // Each joint's velocity Jacobian column at each body's centre of mass (the body's velocity
+    // per unit joint rate), zero where the joint does not move the body: computed once, read
+    // by every pair of joints below.
+    let mut com_velocity = [[Vector3::<f64>::zeros(); MAX_BODIES]; ARM_DOF];
+    for (j, joint) in joints.iter().enumerate() {
+        for &b in &arm.downstream[j] {
+            if let Some(body) = &bodies[b] {
+                com_velocity[j][b] = joint.axis.cross(&(body.com - joint.anchor));
+            }
+        }
+    }
 
     // M: for i ≤ j, the bodies both joints move are those downstream of j.
     let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
@@ -96,10 +108,10 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
         for i in 0..=j {
             let (a_i, a_j) = (&joints[i], &joints[j]);
             let mut m = 0.0;
-            for body in arm.downstream[j].iter().filter_map(|&b| bodies[b].as_ref()) {
-                let v_i = a_i.axis.cross(&(body.com - a_i.anchor));
-                let v_j = a_j.axis.cross(&(body.com - a_j.anchor));
-                m += body.mass * v_i.dot(&v_j) + a_i.axis.dot(&(body.inertia * a_j.axis));
+            for &b in &arm.downstream[j] {
+                let Some(body) = &bodies[b] else { continue };
+                let (v_i, v_j) = (&com_velocity[i][b], &com_velocity[j][b]);
+                m += body.mass * v_i.dot(v_j) + a_i.axis.dot(&(body.inertia * a_j.axis));
             }
             mass_matrix[(i, j)] = m;
             mass_matrix[(j, i)] = m;
