@@ -3,8 +3,10 @@
 //!
 //! Static solids come from [`arena_parts`] (what `SimWorld::add_arena` turns into colliders)
 //! and the goal marker from [`goal_marker_parts`]; the object from [`object_parts`] (what
-//! `SimWorld::add_object` collides with), posed by the object body; the arm from its
-//! [`RobotModel`] (the URDFs), each shape posed by its rigid body. Nothing here knows a size.
+//! `SimWorld::add_object` collides with), posed by the object body; the arm and gripper from
+//! the `<visual>` elements of their URDFs (the files the physics reads its collision shapes
+//! and joints from), each posed by the rigid body its link belongs to. Nothing here knows a
+//! size.
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
@@ -15,7 +17,7 @@ use crate::TaskSpec;
 use crate::arena::{
     GROUND_HALF_SIZE, Placed, Primitive, arena_parts, goal_marker_parts, object_parts,
 };
-use crate::physics::{RobotModel, Shape, SimWorld, from_pose};
+use crate::physics::{RobotModel, SimWorld, from_pose, robot_description, urdf_pose};
 
 /// What carries a solid, and so gives its pose each frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -52,8 +54,8 @@ const GROUND_COLOUR: [f32; 3] = [0.55, 0.53, 0.50];
 /// The goal marker: the reference's rgba (0.8, 0.8, 0.8, 0.3).
 const GOAL_COLOUR: [f32; 3] = [0.8, 0.8, 0.8];
 const GOAL_ALPHA: f32 = 0.3;
-/// The arm's shapes until its URDF gives colours.
-const ARM_COLOUR: [f32; 3] = [0.62, 0.63, 0.65];
+/// A visual whose URDF material gives no colour.
+const UNPAINTED: [f32; 3] = [0.62, 0.63, 0.65];
 /// Toward the key light (world): the reference's two lights shine along (0, −0.15, −1).
 const TOWARD_LIGHT: [f64; 3] = [0.0, 0.15, 1.0];
 
@@ -95,17 +97,15 @@ impl SceneRenderer {
             Carrier::Object,
             opaque(SceneClass::Object),
         ));
-        for (index, body) in model.bodies.iter().enumerate() {
-            let mut mesh = Mesh::default();
-            for collision in &body.collisions {
-                mesh.append(&shape_mesh(&collision.shape).transformed(&collision.pose));
-            }
-            solids.push(Solid {
-                mesh,
-                carrier: Carrier::ArmBody(index),
-                paint: opaque(SceneClass::Robot)(ARM_COLOUR),
-            });
-        }
+        solids.extend(
+            arm_visuals(model)
+                .into_iter()
+                .map(|(body, mesh, colour)| Solid {
+                    mesh,
+                    carrier: Carrier::ArmBody(body),
+                    paint: opaque(SceneClass::Robot)(colour),
+                }),
+        );
         let goal = goal_marker_parts(task.objective, task.object);
         solids.extend(placed_solids(&goal, Carrier::World, |_| Paint {
             colour: GOAL_COLOUR,
@@ -197,7 +197,7 @@ fn part_colour(name: &str) -> [f32; 3] {
     PART_COLOURS
         .iter()
         .find(|(prefix, _)| name.starts_with(prefix))
-        .map_or(ARM_COLOUR, |(_, colour)| *colour)
+        .map_or(UNPAINTED, |(_, colour)| *colour)
 }
 
 fn primitive_mesh(shape: &Primitive) -> Mesh {
@@ -210,17 +210,52 @@ fn primitive_mesh(shape: &Primitive) -> Mesh {
     }
 }
 
-fn shape_mesh(shape: &Shape) -> Mesh {
-    match *shape {
-        Shape::Box(half) => Mesh::cuboid(half),
-        Shape::Capsule {
-            radius,
-            half_length,
-        } => Mesh::capsule(radius, half_length),
-        Shape::Cylinder {
-            radius,
-            half_length,
-        } => Mesh::cylinder(radius, half_length),
-        Shape::Sphere(radius) => Mesh::sphere(radius),
+/// The arm's and gripper's `<visual>` primitives from its URDF (`robot_description`, the text
+/// viewers get), each as (rigid body, mesh in the body's frame, colour).
+fn arm_visuals(model: &RobotModel) -> Vec<(usize, Mesh, [f32; 3])> {
+    let urdf = urdf_rs::read_from_string(&robot_description(model.robot))
+        .expect("the shipped URDFs parse (the physics read them)");
+    let named_colour = |name: &str| {
+        urdf.materials
+            .iter()
+            .find(|m| m.name == name)
+            .and_then(|m| m.color.as_ref())
+    };
+    let mut visuals = Vec::new();
+    for link in &urdf.links {
+        let (body, link_in_body) = model.links[&link.name];
+        for visual in &link.visual {
+            let colour = visual
+                .material
+                .as_ref()
+                .and_then(|m| m.color.as_ref().or_else(|| named_colour(&m.name)));
+            let colour = colour.map_or(UNPAINTED, |c| {
+                [c.rgba[0], c.rgba[1], c.rgba[2]].map(|v| v as f32)
+            });
+            let mesh = visual_mesh(&visual.geometry).unwrap_or_else(|| {
+                panic!(
+                    "link `{}`: visuals are primitives (box, cylinder, sphere)",
+                    link.name
+                )
+            });
+            visuals.push((
+                body,
+                mesh.transformed(&(link_in_body * urdf_pose(&visual.origin))),
+                colour,
+            ));
+        }
     }
+    visuals
+}
+
+fn visual_mesh(geometry: &urdf_rs::Geometry) -> Option<Mesh> {
+    Some(match *geometry {
+        urdf_rs::Geometry::Box { ref size } => {
+            Mesh::cuboid(Vector3::new(size[0], size[1], size[2]) / 2.0)
+        }
+        urdf_rs::Geometry::Cylinder { radius, length } => Mesh::cylinder(radius, length / 2.0),
+        urdf_rs::Geometry::Sphere { radius } => Mesh::sphere(radius),
+        urdf_rs::Geometry::Capsule { radius, length } => Mesh::capsule(radius, length / 2.0),
+        urdf_rs::Geometry::Mesh { .. } => return None,
+    })
 }
