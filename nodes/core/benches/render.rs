@@ -12,16 +12,17 @@ use std::time::Instant;
 
 use composuite_core::axes::{AxisElement, Robot};
 use composuite_core::env::{Env, EnvConfig};
-use composuite_core::render::CAMERAS;
+use composuite_core::render::{CAMERAS, SceneRenderer};
 
 const SIZES: [(u32, u32); 3] = [(84, 84), (256, 256), (640, 480)];
 
 fn main() {
     println!("arm    camera        size      median_us  best_us");
     for robot in Robot::all() {
-        let task = format!("{}/box/no_obstacle/pick_place", robot.wire_name())
-            .parse()
-            .expect("task");
+        let task: composuite_core::TaskSpec =
+            format!("{}/box/no_obstacle/pick_place", robot.wire_name())
+                .parse()
+                .expect("task");
         let mut env = Env::new(task, EnvConfig::default());
         env.reset(0).expect("reset");
         let start = Instant::now();
@@ -50,8 +51,9 @@ fn main() {
                 );
             }
         }
+        let triangles = SceneRenderer::new(task, env.world().model).triangle_count();
         println!(
-            "{}: scene tessellated in {build_us:.0} µs (first render, 1×1)",
+            "{}: {triangles} triangles, scene tessellated in {build_us:.0} µs (first render, 1×1)",
             robot.wire_name()
         );
     }
