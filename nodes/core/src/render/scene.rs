@@ -106,10 +106,11 @@ impl SceneRenderer {
                     paint: opaque(SceneClass::Robot)(colour),
                 }),
         );
+        // Last, so it tints what is behind it; see-through solids write no class or depth.
         let goal = goal_marker_parts(task.objective, task.object);
         solids.extend(placed_solids(&goal, Carrier::World, |_| Paint {
             colour: GOAL_COLOUR,
-            class: SceneClass::Object,
+            class: SceneClass::Background,
             alpha: Some(GOAL_ALPHA),
         }));
         SceneRenderer {
