@@ -18,6 +18,7 @@ pub mod expert;
 pub mod kinematics;
 pub mod obs;
 pub mod physics;
+pub mod render;
 pub mod reward;
 pub mod rng;
 pub mod sampling;

@@ -30,6 +30,7 @@ use crate::axes::Obstacle;
 use crate::control::{ArmCommandError, Clamped, GripperCommandError};
 use crate::obs::{GoalFactor, Observation, RelativePose, RobotFactor, TaskFactor, xyzw};
 use crate::physics::{ARM_DOF, FINGER_OPEN, PhysicsParams, ServoMode, SimWorld};
+use crate::render::{Camera, Frame, MAX_SIDE, RenderError, SceneRenderer, posed_camera};
 use crate::reward::{
     RewardConfig, StagedReward, Termination, WorldSnapshot, staged_reward, termination,
 };
@@ -214,6 +215,8 @@ pub struct Env {
     last_gripper_action: f64,
     episode_return: f64,
     success_seen: bool,
+    /// The scene's meshes, built on the first [`Env::render`].
+    renderer: Option<Box<SceneRenderer>>,
 }
 
 impl Env {
@@ -236,6 +239,7 @@ impl Env {
             last_gripper_action: 0.0,
             episode_return: 0.0,
             success_seen: false,
+            renderer: None,
         }
     }
 
@@ -506,6 +510,35 @@ impl Env {
     /// The simulated world (read only; commands go through [`Env::step`]).
     pub fn world(&self) -> &SimWorld {
         &self.world
+    }
+
+    /// The scene as camera `camera` (one of [`CAMERAS`](crate::render::CAMERAS)) sees it now,
+    /// `width` × `height` pixels: colour, depth along the optical axis (m) and what each pixel
+    /// shows. The same state gives the same frame, bit for bit. The first call reads the URDF's
+    /// visuals and tessellates the scene (under 2 ms); later calls only pose and draw it.
+    ///
+    /// ```
+    /// use composuite_core::env::{Env, EnvConfig};
+    /// let mut env = Env::new("Panda/box/no_obstacle/pick_place".parse().unwrap(), EnvConfig::default());
+    /// env.reset(0).unwrap();
+    /// let frame = env.render("frontview", 84, 84).unwrap();
+    /// assert_eq!(frame.rgb.len(), 84 * 84 * 3);
+    /// assert!(env.render("front", 84, 84).unwrap_err().to_string().contains("frontview"));
+    /// ```
+    pub fn render(&mut self, camera: &str, width: u32, height: u32) -> Result<Frame, RenderError> {
+        let camera = self.camera(camera)?;
+        if !(1..=MAX_SIDE).contains(&width) || !(1..=MAX_SIDE).contains(&height) {
+            return Err(RenderError::BadSize { width, height });
+        }
+        let renderer = self
+            .renderer
+            .get_or_insert_with(|| Box::new(SceneRenderer::new(self.task, self.world.model)));
+        Ok(renderer.render(&self.world, &camera, width, height))
+    }
+
+    /// Camera `name` where it is now (the wrist camera moves with the arm).
+    pub fn camera(&self, name: &str) -> Result<Camera, RenderError> {
+        posed_camera(&self.world, name)
     }
 }
 

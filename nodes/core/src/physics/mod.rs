@@ -9,10 +9,12 @@ mod params;
 mod robot_model;
 mod tags;
 mod torsion;
+mod urdf_capsule;
 mod world;
 
 pub use arm_dynamics::{ArmDynamics, ArmState, arm_dynamics};
 pub use params::{ArmGains, GripperParams, PhysicsParams};
+pub(crate) use robot_model::urdf_pose;
 pub use robot_model::{
     BodyModel, CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, JointModel,
     LinkJoint, ModelError, RobotModel, Shape, build_model, robot_description, robot_model,

@@ -10,6 +10,7 @@ use std::sync::OnceLock;
 
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 
+use super::urdf_capsule::join_capsules;
 use crate::axes::{AxisElement, Robot};
 
 /// The URDF texts, compiled in so the binaries do not depend on the working directory.
@@ -210,10 +211,12 @@ pub fn build_model(
     arm_urdf: &str,
     gripper_urdf: &str,
 ) -> Result<RobotModel, ModelError> {
-    let arm =
+    let mut arm =
         urdf_rs::read_from_string(arm_urdf).map_err(|e| ModelError(format!("arm URDF: {e}")))?;
-    let gripper = urdf_rs::read_from_string(gripper_urdf)
+    let mut gripper = urdf_rs::read_from_string(gripper_urdf)
         .map_err(|e| ModelError(format!("gripper URDF: {e}")))?;
+    join_capsules(&mut arm)?;
+    join_capsules(&mut gripper)?;
     let mut links: Vec<urdf_rs::Link> = arm.links.clone();
     links.extend(gripper.links.iter().cloned());
     let mut joints: Vec<urdf_rs::Joint> = arm.joints.clone();
