@@ -436,7 +436,8 @@ impl PhysicsPipeline {
         // TODO: do this only on user-change.
         // TODO: do we want some kind of automatic inverse kinematics?
         for multibody in &mut multibody_joints.multibodies {
-            multibody.1.forward_kinematics(bodies, true);
+            // CompoSuite-ROS patch: skipped when nothing changed since it last ran.
+            multibody.1.forward_kinematics_if_changed(bodies, true);
             multibody
                 .1
                 .update_rigid_bodies_internal(bodies, true, false, false);

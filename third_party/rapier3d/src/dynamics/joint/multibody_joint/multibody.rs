@@ -134,6 +134,10 @@ pub struct Multibody {
     coriolis_v: Vec<OMatrix<Real, Dim, Dyn>>,
     coriolis_w: Vec<OMatrix<Real, AngDim, Dyn>>,
     i_coriolis_dt: Jacobian<Real>,
+    /// CompoSuite-ROS patch: everything the last `forward_kinematics` read, bit for bit (see
+    /// `forward_kinematics_if_changed`), and a workspace to compare it against.
+    fk_inputs: Vec<u32>,
+    fk_inputs_now: Vec<u32>,
 }
 impl Default for Multibody {
     fn default() -> Self {
@@ -170,6 +174,8 @@ impl Multibody {
             root_is_dynamic: false,
             self_contacts_enabled,
             couplings: Vec::new(),
+            fk_inputs: Vec::new(),
+            fk_inputs_now: Vec::new(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
     }
@@ -1463,6 +1469,10 @@ impl Multibody {
     ) {
         // Be sure the degrees of freedom match and take the root position if needed.
         self.update_root_type(bodies, read_root_pose_from_rigid_body);
+        // CompoSuite-ROS patch: remember what this pass reads.
+        let mut inputs = core::mem::take(&mut self.fk_inputs);
+        self.collect_fk_inputs(bodies, &mut inputs);
+        self.fk_inputs = inputs;
 
         // Special case for the root, which has no parent.
         {
@@ -1500,6 +1510,67 @@ impl Multibody {
          * Compute body jacobians.
          */
         self.update_body_jacobians();
+    }
+
+    /// CompoSuite-ROS patch: [`Self::forward_kinematics`], skipped when nothing it reads has
+    /// changed since it last ran — then it would compute exactly what the links already hold.
+    /// The pipeline runs forward kinematics at the start of every step in case the user moved
+    /// something ("TODO: do this only on user-change"), right after the previous step's last
+    /// substep ran it on the same coordinates. What it reads — each link's joint coordinates,
+    /// rotation, frames and locked axes, its parent, its body's centre of mass and type — is
+    /// compared bit for bit, which costs a small fraction of the pass. Returns whether it ran.
+    pub(crate) fn forward_kinematics_if_changed(
+        &mut self,
+        bodies: &RigidBodySet,
+        read_root_pose_from_rigid_body: bool,
+    ) -> bool {
+        let mut now = core::mem::take(&mut self.fk_inputs_now);
+        self.collect_fk_inputs(bodies, &mut now);
+        let unchanged = now == self.fk_inputs;
+        self.fk_inputs_now = now;
+        if unchanged {
+            return false;
+        }
+        self.forward_kinematics(bodies, read_root_pose_from_rigid_body);
+        true
+    }
+
+    /// CompoSuite-ROS patch: the bits of everything `forward_kinematics` reads, into `out`.
+    fn collect_fk_inputs(&self, bodies: &RigidBodySet, out: &mut Vec<u32>) {
+        out.clear();
+        let root_dynamic = bodies
+            .get(self.links[0].rigid_body)
+            .map_or(u32::MAX, |rb| rb.is_dynamic() as u32);
+        out.extend([
+            self.root_is_dynamic as u32,
+            root_dynamic,
+            self.links.len() as u32,
+            self.ndofs as u32,
+        ]);
+        let pose_bits = |out: &mut Vec<u32>, pose: &Pose| {
+            out.extend(pose.translation.as_ref().iter().map(|x| x.to_bits()));
+            out.extend(pose.rotation.as_ref().iter().map(|x| x.to_bits()));
+        };
+        for link in self.links.iter() {
+            let joint = &link.joint;
+            out.extend([
+                link.parent_internal_id as u32,
+                link.assembly_id as u32,
+                joint.data.locked_axes.bits() as u32,
+            ]);
+            out.extend(joint.coords.iter().map(|x| x.to_bits()));
+            out.extend(joint.joint_rot.as_ref().iter().map(|x| x.to_bits()));
+            pose_bits(out, &joint.data.local_frame1);
+            pose_bits(out, &joint.data.local_frame2);
+            match bodies.get(link.rigid_body) {
+                Some(rb) => {
+                    out.push(rb.is_dynamic() as u32);
+                    let com = rb.mprops.local_mprops.local_com;
+                    out.extend(com.as_ref().iter().map(|x| x.to_bits()));
+                }
+                None => out.push(u32::MAX),
+            }
+        }
     }
 
     /// Computes the ids of all the links between the root and the link identified by `link_id`.
