@@ -47,6 +47,40 @@ fn concat_rb_mass_matrix(mass: Vector, inertia: Real) -> SMatrix<Real, SPATIAL_D
     result
 }
 
+/// CompoSuite-ROS patch: `out += Jᵀ·M·J` for a rigid body's spatial mass matrix `M` as
+/// [`concat_rb_mass_matrix`] builds it (a diagonal linear block, the inertia tensor, zero
+/// off-diagonal blocks), computed as nalgebra's `quadform(1, M, J, 1)` computes it but without
+/// the products by `M`'s zeros: column by column, `M·J[:, j]` summed in the order nalgebra's
+/// `gemv` sums it (the terms left out add exact zeros there), then `Jᵀ` times that by
+/// nalgebra's own `gemv_tr`. The result is the same bit for bit, for a third of the products.
+#[cfg(feature = "dim3")]
+fn add_rigid_body_quadform<S: na::StorageMut<Real, Dyn, Dyn>>(
+    out: &mut na::Matrix<Real, Dyn, Dyn, S>,
+    mass_matrix: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
+    jacobian: &na::MatrixView<Real, na::U6, Dyn, na::U1, na::U6>,
+) {
+    let m = mass_matrix;
+    debug_assert!(
+        (0..SPATIAL_DIM).all(|r| (0..SPATIAL_DIM).all(|c| {
+            let linear_diagonal = r < DIM && c == r;
+            let angular_block = r >= DIM && c >= DIM;
+            linear_diagonal || angular_block || m[(r, c)] == 0.0
+        })),
+        "a rigid body's spatial mass matrix is block diagonal with a diagonal linear block"
+    );
+    for j in 0..jacobian.ncols() {
+        let x = jacobian.column(j);
+        let mut work = SVector::<Real, SPATIAL_DIM>::zeros();
+        for r in 0..DIM {
+            work[r] = m[(r, r)] * x[r];
+        }
+        for r in DIM..SPATIAL_DIM {
+            work[r] = m[(r, 3)] * x[3] + m[(r, 4)] * x[4] + m[(r, 5)] * x[5];
+        }
+        out.column_mut(j).gemv_tr(1.0, jacobian, &work, 1.0);
+    }
+}
+
 #[cfg(feature = "dim3")]
 fn concat_rb_mass_matrix(
     mass: Vector,
@@ -909,7 +943,20 @@ impl Multibody {
             let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
             let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
-            // (`quadform` reads a first column even when there is none.)
+            #[cfg(feature = "dim3")]
+            {
+                add_rigid_body_quadform(
+                    &mut self.augmented_mass.view_mut((0, 0), (width, width)),
+                    &rb_mass_matrix_wo_gyro,
+                    &body_jacobian,
+                );
+                add_rigid_body_quadform(
+                    &mut self.acc_augmented_mass.view_mut((0, 0), (width, width)),
+                    &rb_mass_matrix,
+                    &body_jacobian,
+                );
+            }
+            #[cfg(feature = "dim2")]
             if width > 0 {
                 self.augmented_mass.view_mut((0, 0), (width, width)).quadform(
                     1.0,
