@@ -93,11 +93,14 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
     // Each joint's velocity Jacobian column at each body's centre of mass (the body's velocity
     // per unit joint rate), zero where the joint does not move the body: computed once, read
     // by every pair of joints below.
+    // Likewise each body's angular momentum per unit rate of each joint that moves it.
     let mut com_velocity = [[Vector3::<f64>::zeros(); MAX_BODIES]; ARM_DOF];
+    let mut spin_momentum = [[Vector3::<f64>::zeros(); MAX_BODIES]; ARM_DOF];
     for (j, joint) in joints.iter().enumerate() {
         for &b in &arm.downstream[j] {
             if let Some(body) = &bodies[b] {
                 com_velocity[j][b] = joint.axis.cross(&(body.com - joint.anchor));
+                spin_momentum[j][b] = body.inertia * joint.axis;
             }
         }
     }
@@ -106,12 +109,12 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
     let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
     for j in 0..ARM_DOF {
         for i in 0..=j {
-            let (a_i, a_j) = (&joints[i], &joints[j]);
+            let a_i = &joints[i];
             let mut m = 0.0;
             for &b in &arm.downstream[j] {
                 let Some(body) = &bodies[b] else { continue };
                 let (v_i, v_j) = (&com_velocity[i][b], &com_velocity[j][b]);
-                m += body.mass * v_i.dot(v_j) + a_i.axis.dot(&(body.inertia * a_j.axis));
+                m += body.mass * v_i.dot(v_j) + a_i.axis.dot(&spin_momentum[j][b]);
             }
             mass_matrix[(i, j)] = m;
             mass_matrix[(j, i)] = m;
