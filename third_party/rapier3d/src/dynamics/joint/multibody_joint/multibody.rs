@@ -47,6 +47,68 @@ fn concat_rb_mass_matrix(mass: Vector, inertia: Real) -> SMatrix<Real, SPATIAL_D
     result
 }
 
+/// CompoSuite-ROS patch: `y = alpha·a·b + beta·y` for a 3×3 `a` and 3-row `b`, `y`, computed
+/// exactly as nalgebra's `gemm` computes it for these shapes — column by column, each entry
+/// `(alpha·a[i,0])·b[0,j] + beta·y[i,j]`, then `+ (alpha·a[i,k])·b[k,j]` for k = 1, 2 (and
+/// without reading `y` when `beta` is 0) — so the results are the same bit for bit, without
+/// the generic per-column dispatch (the Coriolis terms run a dozen of these per link per step).
+#[cfg(feature = "dim3")]
+#[inline]
+fn gemm3<SY, SB>(
+    y: &mut na::Matrix<Real, na::U3, Dyn, SY>,
+    alpha: Real,
+    a: &na::Matrix3<Real>,
+    b: &na::Matrix<Real, na::U3, Dyn, SB>,
+    beta: Real,
+) where
+    SY: StorageMut<Real, na::U3, Dyn>,
+    SB: na::Storage<Real, na::U3, Dyn>,
+{
+    assert_eq!(y.ncols(), b.ncols(), "gemm3: mismatched column counts");
+    let scaled = a * alpha; // alpha·a[i,k] for every entry, as nalgebra forms them
+    for j in 0..b.ncols() {
+        let (b0, b1, b2) = (b[(0, j)], b[(1, j)], b[(2, j)]);
+        for i in 0..3 {
+            let first = scaled[(i, 0)] * b0;
+            let mut v = if beta == 0.0 {
+                first
+            } else {
+                first + beta * y[(i, j)]
+            };
+            v = scaled[(i, 1)] * b1 + v;
+            v = scaled[(i, 2)] * b2 + v;
+            y[(i, j)] = v;
+        }
+    }
+}
+
+/// CompoSuite-ROS patch: `y += aᵀ·b` for 6-row `a`, `b` (nalgebra's `gemm_tr(1, a, b, 1)`),
+/// each entry's 6-term dot product summed in nalgebra's order, so bit for bit the same.
+#[cfg(feature = "dim3")]
+#[inline]
+fn gemm_tr6_add<SY, SA, SB>(
+    y: &mut na::Matrix<Real, Dyn, Dyn, SY>,
+    a: &na::Matrix<Real, na::U6, Dyn, SA>,
+    b: &na::Matrix<Real, na::U6, Dyn, SB>,
+) where
+    SY: StorageMut<Real, Dyn, Dyn>,
+    SA: na::Storage<Real, na::U6, Dyn>,
+    SB: na::Storage<Real, na::U6, Dyn>,
+{
+    assert_eq!((y.nrows(), y.ncols()), (a.ncols(), b.ncols()), "gemm_tr6_add: shapes");
+    for j in 0..b.ncols() {
+        let bj = b.column(j);
+        for i in 0..a.ncols() {
+            let ai = a.column(i);
+            let mut dot: Real = 0.0;
+            for k in 0..6 {
+                dot += ai[k] * bj[k];
+            }
+            y[(i, j)] = dot + y[(i, j)];
+        }
+    }
+}
+
 /// CompoSuite-ROS patch: `out += Jᵀ·M·J` for a rigid body's spatial mass matrix `M` as
 /// [`concat_rb_mass_matrix`] builds it (a diagonal linear block, the inertia tensor, zero
 /// off-diagonal blocks), computed as nalgebra's `quadform(1, M, J, 1)` computes it but without
@@ -1001,28 +1063,29 @@ impl Multibody {
 
                 // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
                 let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &shift_cross_tr, &parent_coriolis_w, 1.0);
+                gemm3(&mut coriolis_v, 1.0, &shift_cross_tr, &parent_coriolis_w, 1.0);
 
                 // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
                 let dvel_cross = vect_to_na(
                     rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
                 )
                 .gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &dvel_cross, &parent_j_w, 1.0);
+                gemm3(&mut coriolis_v, 1.0, &dvel_cross, &parent_j_w, 1.0);
 
                 // JDot/u * qdot
-                coriolis_v.gemm(
+                gemm3(
+                    &mut coriolis_v,
                     1.0,
                     &vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr(),
                     &parent_j_w,
                     1.0,
                 );
-                coriolis_v.gemm(1.0, &(parent_w * shift_cross_tr), &parent_j_w, 1.0);
+                gemm3(&mut coriolis_v, 1.0, &(parent_w * shift_cross_tr), &parent_j_w, 1.0);
 
                 #[cfg(feature = "dim3")]
                 {
                     let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
-                    coriolis_w_parent.gemm(-1.0, &vel_wrt_joint_w, &parent_j_w, 1.0);
+                    gemm3(&mut coriolis_w_parent, -1.0, &vel_wrt_joint_w, &parent_j_w, 1.0);
                 }
                 let coriolis_v = &mut self.coriolis_v[i];
                 let coriolis_w = &mut self.coriolis_w[i];
@@ -1040,13 +1103,13 @@ impl Multibody {
                     );
 
                     let rb_joint_j_v = rb_joint_j.fixed_rows::<DIM>(0);
-                    coriolis_v_part.gemm(2.0, &parent_w, &rb_joint_j_v, 1.0);
+                    gemm3(&mut coriolis_v_part, 2.0, &parent_w, &rb_joint_j_v, 1.0);
 
                     #[cfg(feature = "dim3")]
                     {
                         let rb_joint_j_w = rb_joint_j.fixed_rows::<ANG_DIM>(DIM);
                         let mut coriolis_w_part = coriolis_w.columns_mut(link.assembly_id, ndofs);
-                        coriolis_w_part.gemm(1.0, &parent_w, &rb_joint_j_w, 1.0);
+                        gemm3(&mut coriolis_w_part, 1.0, &parent_w, &rb_joint_j_w, 1.0);
                     }
                 }
             } else {
@@ -1060,14 +1123,15 @@ impl Multibody {
             {
                 // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
                 let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &shift_cross_tr, &coriolis_w, 1.0);
+                gemm3(&mut coriolis_v, 1.0, &shift_cross_tr, &coriolis_w, 1.0);
 
                 // JDot
                 let dvel_cross = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr();
-                coriolis_v.gemm(1.0, &dvel_cross, &rb_j_w, 1.0);
+                gemm3(&mut coriolis_v, 1.0, &dvel_cross, &rb_j_w, 1.0);
 
                 // JDot/u * qdot
-                coriolis_v.gemm(
+                gemm3(
+                    &mut coriolis_v,
                     1.0,
                     &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr),
                     &rb_j_w,
@@ -1100,12 +1164,14 @@ impl Multibody {
             {
                 let mut i_coriolis_dt = self.i_coriolis_dt.columns_mut(0, width);
                 let mut i_coriolis_dt_w = i_coriolis_dt.fixed_rows_mut::<ANG_DIM>(DIM);
-                i_coriolis_dt_w.gemm(dt, &mat_to_na(rb_inertia), &coriolis_w, 0.0);
+                gemm3(&mut i_coriolis_dt_w, dt, &mat_to_na(rb_inertia), &coriolis_w, 0.0);
             }
 
-            self.acc_augmented_mass
-                .view_mut((0, 0), (width, width))
-                .gemm_tr(1.0, &rb_j, &self.i_coriolis_dt.columns(0, width), 1.0);
+            gemm_tr6_add(
+                &mut self.acc_augmented_mass.view_mut((0, 0), (width, width)),
+                &rb_j,
+                &self.i_coriolis_dt.columns(0, width),
+            );
         }
 
         /*
