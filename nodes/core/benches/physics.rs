@@ -5,7 +5,8 @@
 //! cargo bench -p composuite_core --bench physics
 //! ```
 //! Prints, per arm: µs per physics step, control steps/s (25 steps each), scene build time,
-//! reset time, and the heap bytes a scene holds. Wall-clock times on one thread; the machine
+//! reset time, the heap bytes a scene holds, and how many heap allocations a physics step
+//! makes with the stiff servos and with the reference controller law. Wall-clock times on one thread; the machine
 //! may be shared, so each figure is the best of several repeats.
 
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -15,16 +16,19 @@ use std::time::Instant;
 use composuite_core::arena::{BIN1_POSITION, arena_parts, object_geometry};
 use composuite_core::axes::{AxisElement, Object, Objective, Obstacle, Robot};
 use composuite_core::control::validate_arm_targets;
-use composuite_core::physics::{FINGER_OPEN, PhysicsParams, SimWorld};
+use composuite_core::physics::{FINGER_OPEN, PhysicsParams, ServoMode, SimWorld};
 use nalgebra::Isometry3;
 use rand::{Rng, SeedableRng};
 
-/// Counts live heap bytes so a scene's footprint can be read off.
+/// Counts live heap bytes so a scene's footprint can be read off, and allocations (`alloc`
+/// and `realloc` calls) so a step's can.
 struct Counting;
 static LIVE: AtomicIsize = AtomicIsize::new(0);
+static ALLOCATIONS: AtomicIsize = AtomicIsize::new(0);
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         LIVE.fetch_add(layout.size() as isize, Ordering::Relaxed);
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
@@ -32,6 +36,7 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
         LIVE.fetch_add(
             new_size as isize - layout.size() as isize,
             Ordering::Relaxed,
@@ -57,6 +62,23 @@ fn build(robot: Robot) -> SimWorld {
     world
 }
 
+/// Heap allocations per physics step over `steps` steps after a warm-up, in `mode`.
+fn allocations_per_step(robot: Robot, mode: ServoMode, steps: usize) -> f64 {
+    let mut world = build(robot);
+    world.set_servo_mode(mode);
+    let mut targets = robot.init_qpos();
+    targets[1] += 0.2; // keep the arm moving
+    world.set_arm_targets(&targets);
+    for _ in 0..50 {
+        world.step(); // warm-up: workspaces reach their size
+    }
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for _ in 0..steps {
+        world.step();
+    }
+    (ALLOCATIONS.load(Ordering::Relaxed) - before) as f64 / steps as f64
+}
+
 fn best<T>(repeats: usize, mut f: impl FnMut() -> (f64, T)) -> f64 {
     (0..repeats).map(|_| f().0).fold(f64::INFINITY, f64::min)
 }
@@ -72,8 +94,15 @@ fn main() {
         params.length_unit
     );
     println!(
-        "{:<6} {:>12} {:>16} {:>12} {:>10} {:>12} {:>16}",
-        "arm", "us/step", "control steps/s", "build ms", "reset us", "scene kB", "+workspace kB"
+        "{:<6} {:>12} {:>16} {:>12} {:>10} {:>12} {:>16} {:>22}",
+        "arm",
+        "us/step",
+        "control steps/s",
+        "build ms",
+        "reset us",
+        "scene kB",
+        "+workspace kB",
+        "allocs/step stiff/ref"
     );
     for robot in Robot::all() {
         let build_ms = best(5, || {
@@ -116,15 +145,21 @@ fn main() {
             }
             (t.elapsed().as_secs_f64() * 1e3, ())
         });
+        let allocations = format!(
+            "{:.1} / {:.1}",
+            allocations_per_step(robot, ServoMode::Stiff, 500),
+            allocations_per_step(robot, ServoMode::Reference, 500)
+        );
         println!(
-            "{:<6} {:>12.1} {:>16.0} {:>12.2} {:>10.1} {:>12.1} {:>16.1}",
+            "{:<6} {:>12.1} {:>16.0} {:>12.2} {:>10.1} {:>12.1} {:>16.1} {:>22}",
             robot.wire_name(),
             us_per_step,
             1e6 / (us_per_step * params.substeps as f64),
             build_ms,
             reset_us,
             scene_bytes as f64 / 1024.0,
-            (with_workspace - scene_bytes) as f64 / 1024.0
+            (with_workspace - scene_bytes) as f64 / 1024.0,
+            allocations
         );
     }
 }
