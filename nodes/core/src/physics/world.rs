@@ -867,13 +867,6 @@ fn coordinate_axis(kind: JointKind) -> usize {
 /// the floor, so the broad phase does not hand such pairs to the narrow phase at all.
 const FLOOR_GROUP: Group = Group::GROUP_1;
 
-/// The arm's (and gripper's) collision group. The arm is one multibody with self-contacts
-/// off, so the narrow phase would drop every pair of its colliders; but adjacent links'
-/// bounding boxes always overlap, and the broad phase made ~18 such pairs that the narrow
-/// phase then looked at and cleared every step (~5 % of a step). Left out of the arm's own
-/// filter, they are never made.
-const ARM_GROUP: Group = Group::GROUP_2;
-
 /// Clearance (m) kept between the floor and the lowest point a body could reach before its
 /// floor pair is dropped: far more than rapier's contact prediction distance (2 mm).
 const FLOOR_CLEARANCE: f64 = 0.05;
@@ -951,14 +944,14 @@ fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f
         poses[joint.child] = poses[joint.parent] * joint.origin;
     }
     let above_floor = bodies_that_cannot_reach_floor(model, &poses);
-    // The arm's colliders never meet each other (one multibody, self-contacts off), nor the
-    // floor where it is out of reach: pairs the broad phase need not make at all.
+    // Bodies out of the floor's reach: no floor pair for the broad phase to make.
     let arm_groups = |body: usize| {
-        let mut filter = Group::ALL.difference(ARM_GROUP);
-        if above_floor[body] {
-            filter = filter.difference(FLOOR_GROUP);
-        }
-        InteractionGroups::new(ARM_GROUP, filter, InteractionTestMode::And)
+        let filter = if above_floor[body] {
+            Group::ALL.difference(FLOOR_GROUP)
+        } else {
+            Group::ALL
+        };
+        InteractionGroups::new(Group::ALL, filter, InteractionTestMode::And)
     };
     let mut bodies = Vec::with_capacity(model.bodies.len());
     let mut finger_colliders = Vec::new();
