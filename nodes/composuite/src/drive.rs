@@ -27,6 +27,9 @@ use crate::launch::Suite;
 const STEP_TIMEOUT: Duration = Duration::from_secs(10);
 /// How long the suite gets to come up (discovery included).
 const STARTUP_TIMEOUT: Duration = Duration::from_secs(30);
+/// How long the agent waits, when a recorder runs, for every reader of its commands to have
+/// received the last ones before it leaves.
+const ACKNOWLEDGE_TIMEOUT: Duration = Duration::from_secs(5);
 
 const AGENT: NodeSpec = NodeSpec {
     name: "agent",
@@ -349,6 +352,17 @@ pub fn drive(
         }
         Ok::<(), String>(())
     })?;
+    if plan.wait_for_recorder {
+        // The last commands may still be on their way to the recorder, which is slower than
+        // the sim under load: dropping the writer now would lose them from the bag.
+        match command.wait_for_acknowledgments(ACKNOWLEDGE_TIMEOUT) {
+            Ok(true) => {}
+            Ok(false) => eprintln!(
+                "warning: the recorder did not acknowledge the last commands within {ACKNOWLEDGE_TIMEOUT:?}; the bag may miss them"
+            ),
+            Err(e) => eprintln!("warning: cannot wait for the recorder's acknowledgments: {e:?}"),
+        }
+    }
     node.shutdown();
     Ok(Driven {
         outcomes,

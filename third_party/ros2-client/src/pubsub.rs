@@ -41,6 +41,16 @@ impl<M: Serialize> Publisher<M> {
     self.datawriter.assert_liveliness().map_err(Into::into)
   }
 
+  // CompoSuite-ROS patch: RustDDS' `wait_for_acknowledgments`, so a node about to drop a
+  // reliable publisher can first let every matched reader receive what it wrote (true when all
+  // have, false on timeout).
+  pub fn wait_for_acknowledgments(&self, max_wait: std::time::Duration) -> WriteResult<bool, ()> {
+    self
+      .datawriter
+      .wait_for_acknowledgments(max_wait)
+      .map_err(Into::into)
+  }
+
   pub fn guid(&self) -> rustdds::GUID {
     self.datawriter.guid()
   }

@@ -26,6 +26,8 @@ use crate::shared::params::{ParamSpec, any_value};
 
 /// How often the recorder looks for new publishers.
 const DISCOVERY_PERIOD: Duration = Duration::from_millis(100);
+/// On SIGINT/SIGTERM, the readers are drained until none yields a sample for this long.
+const DRAIN_QUIET: Duration = Duration::from_millis(200);
 /// Samples a topic's reader holds before the recorder takes them (far more than a lockstep
 /// step ever has in flight).
 const READER_DEPTH: i32 = 1000;
@@ -293,9 +295,17 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
             futures::select_biased! {
                 signal = signals.recv().fuse() => {
                     log.info(format!("signal {} received, closing the bag", signal.unwrap_or(0)));
-                    // What arrived before the signal is still in the readers: take it.
-                    while let Some(Some((topic, sample))) = streams.next().now_or_never() {
-                        write_sample(&mut bag, topic, sample, &log)?;
+                    // What arrived before the signal is still in the readers: take it until
+                    // the readers stay quiet for DRAIN_QUIET. (Taking only the streams that are
+                    // ready at this instant lost samples whose arrival had not yet woken their
+                    // stream: the last command of a session, now and then.)
+                    loop {
+                        futures::select_biased! {
+                            sample = streams.select_next_some() => {
+                                write_sample(&mut bag, sample.0, sample.1, &log)?;
+                            }
+                            _ = futures::FutureExt::fuse(smol::Timer::after(DRAIN_QUIET)) => break,
+                        }
                     }
                     return Ok(());
                 }
