@@ -80,16 +80,27 @@ class CompoSuiteNativeEnv(gymnasium.Env):
         horizon: episode length limit in control steps (500, as the reference's training).
         reward_shaping: staged rewards (True) or sparse ones (1 on success, else 0).
         reward_scale: multiplies every reward (1).
+        render_mode: None, or "rgb_array": `render()` returns the scene as a `(height, width, 3)`
+            uint8 array (so Gymnasium's `RecordVideo` works), drawn on the CPU.
+        render_camera: which of the reference's cameras `render()` looks through: "frontview"
+            (default), "agentview", "birdview", "sideview" or "eye_in_hand".
+        render_width, render_height: the picture's size in pixels (256 × 256).
     """
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, task: str | Task = DEFAULT_TASK, *, action_mode: str = "reference",
                  use_task_id_obs: bool = True, horizon: int = 500, reward_shaping: bool = True,
-                 reward_scale: float = 1.0, render_mode=None):
+                 reward_scale: float = 1.0, render_mode: str | None = None,
+                 render_camera: str = "frontview", render_width: int = 256,
+                 render_height: int = 256):
         check_action_mode(action_mode)
-        if render_mode is not None:
-            raise ValueError("CompoSuiteNativeEnv does not render yet; render_mode must be None")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode {render_mode!r}: use None or one of "
+                             f"{self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self.render_camera = render_camera
+        self.render_size = (render_width, render_height)
         self.action_mode = action_mode
         self.use_task_id_obs = use_task_id_obs
         self._batch = _native.Batch([_task_name(task)], threads=1, horizon=horizon,
@@ -106,6 +117,16 @@ class CompoSuiteNativeEnv(gymnasium.Env):
         b = self._batch
         self._modes, self._seed_in, self._action_in = b.modes, b.seeds, b.actions
         self._obs, self._steps = b.observations, b.steps
+        if render_mode is not None:
+            self.render()  # a bad camera name or size fails here, not at the first frame
+
+    def render(self):
+        """The scene now as a `(height, width, 3)` uint8 array with `render_mode="rgb_array"`;
+        None without a render mode (Gymnasium's convention)."""
+        if self.render_mode is None:
+            return None
+        width, height = self.render_size
+        return self._batch.render(0, self.render_camera, width, height)
 
     # ---- the Gymnasium API ----------------------------------------------------------------------
 

@@ -310,3 +310,34 @@ def test_ppo_example_trains_in_process_by_default(tmp_path):
     wrong = subprocess.run([sys.executable, str(REPO / "examples" / "ppo_train.py"), "--backend", "native",
                             "--namespaces", "/env_00"], capture_output=True, text=True, timeout=60)
     assert wrong.returncode == 2 and "--backend ros" in wrong.stderr
+
+
+def test_renders_rgb_arrays_of_the_scene_as_gymnasium_expects():
+    """render_mode="rgb_array": render() gives the scene through the chosen camera as an (h, w, 3)
+    uint8 array — the same frame for the same state, another when the arm moves or another camera
+    looks; without a render mode it gives None; bad settings are refused at construction."""
+    assert CompoSuiteNativeEnv(TASKS[0], horizon=HORIZON).render() is None
+    env = CompoSuiteNativeEnv(TASKS[0], horizon=HORIZON, render_mode="rgb_array",
+                              render_width=96, render_height=64)
+    assert env.metadata["render_fps"] == 20
+    check_env(env)  # Gymnasium's own render checks included
+    env.reset(seed=3)
+    first = env.render()
+    assert first.shape == (64, 96, 3) and first.dtype == np.uint8
+    assert len(np.unique(first.reshape(-1, 3), axis=0)) > 10, "a scene, not a blank"
+    assert np.array_equal(env.render(), first), "rendering changes nothing"
+    for _ in range(10):
+        env.step(np.array([1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    assert not np.array_equal(env.render(), first), "the arm moved"
+    env.reset(seed=3)
+    assert np.array_equal(env.render(), first), "the same state, the same frame"
+    bird = CompoSuiteNativeEnv(TASKS[0], horizon=HORIZON, render_mode="rgb_array",
+                               render_camera="birdview", render_width=96, render_height=64)
+    bird.reset(seed=3)
+    assert not np.array_equal(bird.render(), first)
+    with pytest.raises(ValueError, match="frontview.*eye_in_hand"):
+        CompoSuiteNativeEnv(TASKS[0], render_mode="rgb_array", render_camera="topview")
+    with pytest.raises(ValueError, match="rgb_array"):
+        CompoSuiteNativeEnv(TASKS[0], render_mode="human")
+    with pytest.raises(ValueError):
+        CompoSuiteNativeEnv(TASKS[0], render_mode="rgb_array", render_width=0)

@@ -13,7 +13,7 @@ use composuite_core::env::{Action, EnvConfig, EnvError};
 use composuite_core::physics::{ARM_DOF, pad_gap};
 use composuite_core::rng::{MT_STATE_WORDS, Mt19937};
 use numpy::prelude::*;
-use numpy::{PyArray1, PyArray2, PyReadonlyArray1};
+use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
 use pyo3::exceptions::{PyIndexError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
@@ -305,6 +305,25 @@ impl Batch {
     fn episode(&self, index: usize) -> PyResult<u32> {
         self.check_index(index)?;
         Ok(self.batch.env(index).episode())
+    }
+
+    /// An RGB picture of environment `index` as it is now, from one of the reference's cameras
+    /// (`frontview`, `agentview`, `birdview`, `sideview`, `eye_in_hand`): a `(height, width, 3)`
+    /// uint8 array, rows from the top.
+    fn render<'py>(
+        &mut self,
+        py: Python<'py>,
+        index: usize,
+        camera: &str,
+        width: u32,
+        height: u32,
+    ) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        self.check_index(index)?;
+        let frame = self
+            .batch
+            .render(index, camera, width, height)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        PyArray1::from_vec(py, frame.rgb).reshape([height as usize, width as usize, 3])
     }
 
     /// The robot of environment `index` (wire name).

@@ -275,6 +275,18 @@ impl EnvBatch {
         &self.envs[index]
     }
 
+    /// A picture of environment `index` as it is now ([`Env::render`]; rendering changes no
+    /// state, so the batch's rows stay as they are).
+    pub fn render(
+        &mut self,
+        index: usize,
+        camera: &str,
+        width: u32,
+        height: u32,
+    ) -> Result<crate::render::Frame, crate::render::RenderError> {
+        self.envs[index].render(camera, width, height)
+    }
+
     /// Every environment, in order.
     pub fn envs(&self) -> &[Env] {
         &self.envs
