@@ -81,7 +81,8 @@ class CompoSuiteNativeEnv(gymnasium.Env):
         reward_shaping: staged rewards (True) or sparse ones (1 on success, else 0).
         reward_scale: multiplies every reward (1).
         render_mode: None, or "rgb_array": `render()` returns the scene as a `(height, width, 3)`
-            uint8 array (so Gymnasium's `RecordVideo` works), drawn on the CPU.
+            uint8 array (Gymnasium's render API, which wrappers such as `RecordVideo` read),
+            drawn on the CPU.
         render_camera: which of the reference's cameras `render()` looks through: "frontview"
             (default), "agentview", "birdview", "sideview" or "eye_in_hand".
         render_width, render_height: the picture's size in pixels (256 × 256).
