@@ -243,26 +243,7 @@ impl TopicCache {
 
   // The Writer is gone, so samples it never completed are no longer awaited.
   pub fn forget_reliable_writer(&mut self, writer: GUID) {
-    // CompoSuite-ROS patch: what a departed Writer sent stays readable. The marker bounds what a
-    // reliable Reader may take from that Writer, and removing it reset the bound to the start,
-    // so samples received (and acknowledged) but not yet taken when the Writer left could never
-    // be taken: a recorder lost the last command of an agent that sent it and left. Nothing
-    // more will come from the Writer, so everything it sent that is present is released (a gap
-    // before it is given up on); the marker stays, a sequence number per departed Writer.
-    match self
-      .sequence_numbers
-      .get(&writer)
-      .and_then(|sn_map| sn_map.keys().next_back())
-    {
-      Some(last) => {
-        let released = last.plus_1();
-        let marker = self.received_reliably_before.entry(writer).or_default();
-        *marker = max(*marker, released);
-      }
-      None => {
-        self.received_reliably_before.remove(&writer);
-      }
-    }
+    self.received_reliably_before.remove(&writer);
   }
 
   // The oldest change that a Reliable DataReader cannot yet take, because an
