@@ -91,9 +91,8 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
     });
 
     // Each joint's velocity Jacobian column at each body's centre of mass (the body's velocity
-    // per unit joint rate), zero where the joint does not move the body: computed once, read
-    // by every pair of joints below.
-    // Likewise each body's angular momentum per unit rate of each joint that moves it.
+    // per unit joint rate) and the body's angular momentum per unit joint rate, zero where the
+    // joint does not move the body: computed once, read by every pair of joints below.
     let mut com_velocity = [[Vector3::<f64>::zeros(); MAX_BODIES]; ARM_DOF];
     let mut spin_momentum = [[Vector3::<f64>::zeros(); MAX_BODIES]; ARM_DOF];
     for (j, joint) in joints.iter().enumerate() {

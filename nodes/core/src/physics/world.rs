@@ -937,12 +937,17 @@ fn bounding_radius(shape: &Shape) -> f64 {
     }
 }
 
-fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f64>) -> ArmHandles {
-    // Body poses at q = 0, from the joint origins.
+/// Each body's world pose with every joint at 0, the base at `base`: the joint origins chained.
+fn rest_poses(model: &RobotModel, base: &Isometry3<f64>) -> Vec<Isometry3<f64>> {
     let mut poses: Vec<Isometry3<f64>> = vec![*base; model.bodies.len()];
     for joint in &model.joints {
         poses[joint.child] = poses[joint.parent] * joint.origin;
     }
+    poses
+}
+
+fn insert_arm(physics: &mut PhysicsWorld, model: &RobotModel, base: &Isometry3<f64>) -> ArmHandles {
+    let poses = rest_poses(model, base);
     let above_floor = bodies_that_cannot_reach_floor(model, &poses);
     // Bodies out of the floor's reach: no floor pair for the broad phase to make.
     let arm_groups = |body: usize| {
@@ -1065,10 +1070,7 @@ mod tests {
         let mut rng = rand::rngs::StdRng::seed_from_u64(31);
         for robot in Robot::all() {
             let mut world = SimWorld::new(robot, PhysicsParams::default());
-            let mut poses = vec![robot_base_pose(); world.model.bodies.len()];
-            for joint in &world.model.joints {
-                poses[joint.child] = poses[joint.parent] * joint.origin;
-            }
+            let poses = rest_poses(world.model, &robot_base_pose());
             let above = bodies_that_cannot_reach_floor(world.model, &poses);
             assert!(
                 above.iter().filter(|&&a| a).count() >= 4,

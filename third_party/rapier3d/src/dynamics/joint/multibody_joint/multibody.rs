@@ -900,7 +900,7 @@ impl Multibody {
                 let parent_link = &self.links[parent_id];
                 parent_to_world = parent_link.local_to_world;
 
-                let parent_width = parent_link.assembly_id + parent_link.joint.ndofs();
+                let parent_width = self.nonzero_columns(parent_id);
                 let (link_j, parent_j) = self.body_jacobians.index_mut_const(i, parent_id);
                 link_j.copy_from(parent_j);
 
@@ -1049,7 +1049,7 @@ impl Multibody {
                 let parent_id = link.parent_internal_id;
                 let parent_link = &self.links[parent_id];
                 let parent_rb = &bodies[parent_link.rigid_body];
-                let parent_width = parent_link.assembly_id + parent_link.joint.ndofs();
+                let parent_width = self.nonzero_columns(parent_id);
                 let parent_j = self.body_jacobians[parent_id].columns(0, parent_width);
                 let parent_j_w = parent_j.fixed_rows::<ANG_DIM>(DIM);
                 let parent_w = SimdAngVector::<Real>::from(parent_rb.vels.angvel).gcross_matrix();
