@@ -243,7 +243,49 @@ impl TopicCache {
 
   // The Writer is gone, so samples it never completed are no longer awaited.
   pub fn forget_reliable_writer(&mut self, writer: GUID) {
-    self.received_reliably_before.remove(&writer);
+    // CompoSuite-ROS patch: what a departed Writer sent stays readable. The marker bounds what a
+    // reliable Reader may take from that Writer, and removing it reset the bound to the start,
+    // so samples received (and acknowledged) but not yet taken when the Writer left could never
+    // be taken: a recorder lost the last command of an agent that sent it and left. Nothing
+    // more will come from the Writer, so everything it sent that is present is released (a gap
+    // before it is given up on); the marker stays, a sequence number per departed Writer.
+    match self
+      .sequence_numbers
+      .get(&writer)
+      .and_then(|sn_map| sn_map.keys().next_back())
+    {
+      Some(last) => {
+        let released = last.plus_1();
+        let marker = self.received_reliably_before.entry(writer).or_default();
+        *marker = max(*marker, released);
+      }
+      None => {
+        self.received_reliably_before.remove(&writer);
+      }
+    }
+  }
+
+  // CompoSuite-ROS patch: where a new VOLATILE DataReader starts reading. The cache is shared by
+  // every Reader of the topic in this participant, so it may already hold samples written before
+  // this Reader existed; a volatile Reader must not get them (DDS: only data written after it
+  // matched). Without this a Reader created later (an environment restarted inside a composed
+  // process) took the requests its predecessor had already answered. Returns the best-effort read
+  // pointer (the last instant added) and, per Writer, the last sequence number present.
+  pub fn read_pointers_for_new_volatile_reader(
+    &self,
+  ) -> (Timestamp, BTreeMap<GUID, SequenceNumber>) {
+    let last_read_sn = self
+      .sequence_numbers
+      .iter()
+      .filter_map(|(writer, sn_map)| sn_map.keys().next_back().map(|sn| (*writer, *sn)))
+      .collect();
+    let latest_instant = self
+      .changes
+      .keys()
+      .next_back()
+      .copied()
+      .unwrap_or(Timestamp::ZERO);
+    (latest_instant, last_read_sn)
   }
 
   // The oldest change that a Reliable DataReader cannot yet take, because an
@@ -748,6 +790,63 @@ mod tests {
     assert!(topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(10)));
     assert!(!topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(5)));
     assert_eq!(topic_cache.reliable_before(writer), SequenceNumber::new(10));
+  }
+
+  // CompoSuite-ROS patch tests. A Writer's samples 1..=3 received, 1 taken, then the Writer
+  // leaves: 2 and 3 must still be taken (they were acknowledged; nothing else will deliver them).
+  #[test]
+  fn a_departed_writers_received_samples_stay_readable() {
+    let mut topic_cache = keep_all_topic_cache();
+    let writer = user_writer();
+    for sn in 1..=3 {
+      add_after_missing_first(&mut topic_cache, writer, sn, 8);
+    }
+    topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(4));
+    let last_read_sn = BTreeMap::from([(writer, SequenceNumber::new(1))]);
+    topic_cache.forget_reliable_writer(writer);
+    let readable: Vec<_> = topic_cache
+      .get_changes_in_range_reliable(&last_read_sn)
+      .map(|(_, cc)| cc.sequence_number)
+      .collect();
+    assert_eq!(readable, [SequenceNumber::new(2), SequenceNumber::new(3)]);
+  }
+
+  // A Reader created when the shared cache already holds samples starts after them, reliable
+  // and best-effort alike, and reads what comes next.
+  #[test]
+  fn a_new_volatile_reader_starts_after_what_the_cache_holds() {
+    let mut topic_cache = keep_all_topic_cache();
+    let writer = user_writer();
+    for sn in 1..=3 {
+      add_after_missing_first(&mut topic_cache, writer, sn, 8);
+    }
+    topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(4));
+    let (latest_instant, last_read_sn) = topic_cache.read_pointers_for_new_volatile_reader();
+    assert_eq!(
+      topic_cache
+        .get_changes_in_range_reliable(&last_read_sn)
+        .count(),
+      0
+    );
+    assert_eq!(
+      topic_cache
+        .get_changes_in_range_best_effort(latest_instant, Timestamp::now())
+        .count(),
+      0
+    );
+    add_after_missing_first(&mut topic_cache, writer, 4, 8);
+    topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(5));
+    let reliable: Vec<_> = topic_cache
+      .get_changes_in_range_reliable(&last_read_sn)
+      .map(|(_, cc)| cc.sequence_number)
+      .collect();
+    assert_eq!(reliable, [SequenceNumber::new(4)]);
+    assert_eq!(
+      topic_cache
+        .get_changes_in_range_best_effort(latest_instant, Timestamp::now())
+        .count(),
+      1
+    );
   }
 
   // E.g. Fast DDS sends its first HEARTBEAT 3 s after matching, so a late joiner

@@ -179,13 +179,29 @@ where
       });
     }
 
+    // CompoSuite-ROS patch: a volatile Reader (the default durability) starts after what the
+    // shared topic cache already holds; see TopicCache::read_pointers_for_new_volatile_reader.
+    let mut read_state = ReadState::new();
+    let volatile = matches!(
+      qos_policy.durability(),
+      None | Some(policy::Durability::Volatile)
+    );
+    if volatile {
+      let (latest_instant, last_read_sn) = topic_cache
+        .lock()
+        .unwrap()
+        .read_pointers_for_new_volatile_reader();
+      read_state.latest_instant = latest_instant;
+      read_state.last_read_sn = last_read_sn;
+    }
+
     Ok(Self {
       my_subscriber: subscriber,
       qos_policy,
       my_guid,
       notification_receiver: Mutex::new(notification_receiver),
       topic_cache,
-      read_state: Mutex::new(ReadState::new()),
+      read_state: Mutex::new(read_state),
       my_topic: topic,
       deserializer_type: PhantomData,
       discovery_command,
