@@ -66,7 +66,23 @@ def tree_cpu_seconds(root: int) -> float:
     return sum(node_suite.cpu_seconds(pid) for pid in process_tree(root))
 
 
-def bench(n: int, isolate: bool, idle: float, steps: int) -> dict:
+def thread_cpu_ticks(root: int) -> dict[str, int]:
+    """Clock ticks (user + system) of every thread below `root`, summed by thread name (digits
+    dropped, so `sim-3` and `sim-41` count together)."""
+    ticks: dict[str, int] = {}
+    for pid in process_tree(root):
+        for task in Path(f"/proc/{pid}/task").glob("*"):
+            try:
+                stat = (task / "stat").read_text()
+            except OSError:
+                continue
+            name = stat[stat.index("(") + 1:stat.rindex(")")].rstrip("0123456789-_ ")
+            fields = stat.rsplit(")", 1)[1].split()
+            ticks[name] = ticks.get(name, 0) + int(fields[11]) + int(fields[12])
+    return ticks
+
+
+def bench(n: int, isolate: bool, idle: float, steps: int, breakdown: bool) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="bench_scale_"))
     domain = node_suite.random_domain()
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
@@ -95,8 +111,17 @@ def bench(n: int, isolate: bool, idle: float, steps: int) -> dict:
         tree = process_tree(launch.pid)
         rss = sum(rss_mb(pid) for pid in tree)
         cpu0 = tree_cpu_seconds(launch.pid)
+        threads0 = thread_cpu_ticks(launch.pid) if breakdown else {}
         time.sleep(idle)
         idle_cpu = 100 * (tree_cpu_seconds(launch.pid) - cpu0) / idle
+        if breakdown:
+            threads1 = thread_cpu_ticks(launch.pid)
+            tick = os.sysconf("SC_CLK_TCK")
+            spent = sorted(((threads1[k] - threads0.get(k, 0), k) for k in threads1), reverse=True)
+            print(f"  idle CPU by thread name ({n} envs, % of one core over {idle:.0f} s):")
+            for t, name in spent[:12]:
+                if t:
+                    print(f"    {100 * t / tick / idle:6.2f}%  {name}", flush=True)
 
         rng = np.random.default_rng(0)
         with CompoSuiteRosEnv(TASK, namespaces[0], timeout=30.0) as single:
@@ -139,6 +164,8 @@ def main() -> None:
     parser.add_argument("--idle", type=float, default=30.0, help="seconds of idle CPU measurement")
     parser.add_argument("--steps", type=int, default=500, help="steps of env_00 stepped alone")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--breakdown", action="store_true",
+                        help="also print the idle CPU by thread name (where it goes)")
     args = parser.parse_args()
     if any(n < 1 for n in args.envs) or args.idle <= 0 or args.steps < 1:
         parser.error("--envs, --idle and --steps must be positive")
@@ -147,7 +174,7 @@ def main() -> None:
         print("envs  mode      procs  RSS MB  per env  idle CPU  up s  answered s  alone steps/s (p99 ms)"
               "  together steps/s", flush=True)
     for n in args.envs:
-        r = bench(n, args.isolate, args.idle, args.steps)
+        r = bench(n, args.isolate, args.idle, args.steps, args.breakdown)
         rows.append(r)
         if not args.json:
             print(f"{r['envs']:4d}  {r['mode']:8s}  {r['processes']:5d}  {r['rss_mb']:6.0f}  "

@@ -1,6 +1,8 @@
 use std::{
   collections::HashMap,
-  sync::{Arc, Mutex},
+  sync::{Arc, Mutex, Weak},
+  thread::Thread,
+  time::{Duration as StdDuration, Instant},
 };
 //use futures::{pin_mut, StreamExt};
 #[cfg(feature = "security")]
@@ -303,11 +305,15 @@ impl Context {
   }
 
   pub(crate) fn update_node(&mut self, node_info: NodeEntitiesInfo) {
-    self.inner.lock().unwrap().update_node(node_info);
+    let mut inner = self.inner.lock().unwrap();
+    inner.update_node(node_info);
+    inner.request_broadcast(&self.inner);
   }
 
   pub(crate) fn remove_node(&mut self, node_name: &str) {
-    self.inner.lock().unwrap().remove_node(node_name);
+    let mut inner = self.inner.lock().unwrap();
+    inner.remove_node(node_name);
+    inner.request_broadcast(&self.inner);
   }
 
   fn get_ros_default_publisher(&self) -> rustdds::Publisher {
@@ -323,8 +329,20 @@ impl Context {
   }
 }
 
+// CompoSuite-ROS patch: ros_discovery_info is published at most once per this interval. It was
+// published at every reader or writer a node created, each time the whole participant's
+// description, so a participant holding many nodes published thousands of ever larger samples
+// while they started (64 environments' 192 nodes: ~0.5 MB each, ~1 GB held at the peak). The
+// last update of a burst follows within the interval, from the announcer thread.
+const NODE_INFO_MIN_INTERVAL: StdDuration = StdDuration::from_millis(50);
+
 struct ContextInner {
   local_nodes: HashMap<String, NodeEntitiesInfo>,
+  // CompoSuite-ROS patch: when ros_discovery_info was last published, whether an update waits
+  // for its turn, and the thread that publishes it then (started at the first wait).
+  last_broadcast: Option<Instant>,
+  broadcast_due: bool,
+  announcer: Option<Thread>,
 
   // ROS Discovery: topic, reader and writer
   ros_discovery_topic: Topic,
@@ -380,6 +398,9 @@ impl ContextInner {
 
     Ok(ContextInner {
       local_nodes: HashMap::new(),
+      last_broadcast: None,
+      broadcast_due: false,
+      announcer: None,
       node_writer,
 
       domain_participant,
@@ -407,13 +428,46 @@ impl ContextInner {
     self
       .local_nodes
       .insert(node_info.fully_qualified_name(), node_info);
-    self.broadcast_node_infos();
   }
 
   /// Removes NodeEntitiesInfo and updates our ContextInfo to ROS2 network
   fn remove_node(&mut self, node_fqn: &str) {
     self.local_nodes.remove(node_fqn);
-    self.broadcast_node_infos();
+  }
+
+  // CompoSuite-ROS patch: publish now if the last publication is at least
+  // NODE_INFO_MIN_INTERVAL old, otherwise leave it to the announcer thread.
+  fn request_broadcast(&mut self, this: &Arc<Mutex<ContextInner>>) {
+    let now = Instant::now();
+    if self
+      .last_broadcast
+      .is_none_or(|last| now >= last + NODE_INFO_MIN_INTERVAL)
+    {
+      self.broadcast_node_infos();
+      self.last_broadcast = Some(now);
+      self.broadcast_due = false;
+      return;
+    }
+    self.broadcast_due = true;
+    match &self.announcer {
+      Some(thread) => thread.unpark(),
+      None => {
+        let weak = Arc::downgrade(this);
+        match std::thread::Builder::new()
+          .name("ros2 node info".to_string())
+          .spawn(move || announce_when_due(weak))
+        {
+          Ok(handle) => self.announcer = Some(handle.thread().clone()),
+          Err(e) => {
+            // No thread to defer to: publish now, as without coalescing.
+            error!("Cannot start the ros_discovery_info announcer: {e}");
+            self.broadcast_node_infos();
+            self.last_broadcast = Some(now);
+            self.broadcast_due = false;
+          }
+        }
+      }
+    }
   }
 
   fn broadcast_node_infos(&self) {
@@ -431,6 +485,43 @@ impl Drop for ContextInner {
     // Clears all nodes and updates our ContextInfo to ROS2 network
     self.local_nodes.clear();
     self.broadcast_node_infos();
+    // CompoSuite-ROS patch: let the announcer see that the Context is gone.
+    if let Some(thread) = &self.announcer {
+      thread.unpark();
+    }
+  }
+}
+
+// CompoSuite-ROS patch: the announcer thread. It publishes a waiting update once its interval
+// has passed, then parks until the next one; it ends with the Context (it holds it only while
+// publishing).
+fn announce_when_due(context: Weak<Mutex<ContextInner>>) {
+  loop {
+    let Some(inner) = context.upgrade() else {
+      return;
+    };
+    let wait = {
+      let mut inner = inner.lock().unwrap();
+      let due_at = inner
+        .last_broadcast
+        .map_or_else(Instant::now, |last| last + NODE_INFO_MIN_INTERVAL);
+      let now = Instant::now();
+      if !inner.broadcast_due {
+        None
+      } else if now >= due_at {
+        inner.broadcast_node_infos();
+        inner.last_broadcast = Some(now);
+        inner.broadcast_due = false;
+        None
+      } else {
+        Some(due_at - now)
+      }
+    };
+    drop(inner);
+    match wait {
+      Some(wait) => std::thread::sleep(wait),
+      None => std::thread::park(),
+    }
   }
 }
 

@@ -22,13 +22,30 @@ macro_rules! socketpair_bridge {
       #[cfg(not(target_os = "windows"))]
       use socketpair::{socketpair_stream, SocketpairStream};
 
+      // CompoSuite-ROS patch: the socket pair is made only when the Source is first registered
+      // with a poll. Every DataReader has two of these channels and every DataWriter one, and
+      // a pair is two file descriptors, so a participant with many endpoints (a process holding
+      // 64 environments' nodes: ~25,000 descriptors) ran out of them, although nothing here
+      // polls these sources through mio (the async API wakes through Wakers). Until then a send
+      // is remembered in `pending` and replayed when the pair is made; no system call is spent.
+      struct Pair {
+        rec: $mio::net::TcpStream,
+        send: $mio::net::TcpStream,
+      }
+
+      #[derive(Default)]
+      struct Shared {
+        pair: Option<Pair>,
+        pending: bool,
+      }
+
       pub struct Source {
-        rec: Mutex<$mio::net::TcpStream>,
+        shared: Arc<Mutex<Shared>>,
       }
 
       #[derive(Clone)]
       pub struct Sender {
-        send: Arc<Mutex<$mio::net::TcpStream>>,
+        shared: Arc<Mutex<Shared>>,
       }
 
       #[cfg(not(target_os = "windows"))]
@@ -40,25 +57,18 @@ macro_rules! socketpair_bridge {
       }
 
       #[cfg(not(target_os = "windows"))]
-      pub fn make() -> io::Result<(Source, Sender)> {
+      fn make_pair() -> io::Result<Pair> {
         let (rec_sps, send_sps) = socketpair_stream()?;
         let rec_sps = set_non_blocking(rec_sps)?;
         let send_sps = set_non_blocking(send_sps)?;
         let rec = $mio::net::TcpStream::from_std(std::net::TcpStream::from(OwnedFd::from(rec_sps)));
         let send =
           $mio::net::TcpStream::from_std(std::net::TcpStream::from(OwnedFd::from(send_sps)));
-        Ok((
-          Source {
-            rec: Mutex::new(rec),
-          },
-          Sender {
-            send: Arc::new(Mutex::new(send)),
-          },
-        ))
+        Ok(Pair { rec, send })
       }
 
       #[cfg(target_os = "windows")]
-      pub fn make() -> io::Result<(Source, Sender)> {
+      fn make_pair() -> io::Result<Pair> {
         let listener = $mio::net::TcpListener::bind("127.0.0.1:0".parse().unwrap())?;
         let addr = listener.local_addr()?;
         let rec = $mio::net::TcpStream::connect(addr)?;
@@ -69,35 +79,65 @@ macro_rules! socketpair_bridge {
         }
         let (send, _addr_send) = accepted?;
         debug!("IPC socket: {addr:#?} <-> {_addr_send:#?}");
+        Ok(Pair { rec, send })
+      }
+
+      pub fn make() -> io::Result<(Source, Sender)> {
+        let shared = Arc::new(Mutex::new(Shared::default()));
         Ok((
           Source {
-            rec: Mutex::new(rec),
+            shared: Arc::clone(&shared),
           },
-          Sender {
-            send: Arc::new(Mutex::new(send)),
-          },
+          Sender { shared },
         ))
+      }
+
+      fn write_one(pair: &mut Pair) {
+        match pair.send.write(&[0xcc]) {
+          Ok(_b) => {}
+          Err(e) => info!("PollEventSender.send: {e}"),
+        }
       }
 
       impl Sender {
         pub fn send(&self) {
-          match self.send.lock().unwrap().write(&[0xcc]) {
-            Ok(_b) => {}
-            Err(e) => info!("PollEventSender.send: {e}"),
+          let mut shared = self.shared.lock().unwrap();
+          match shared.pair.as_mut() {
+            Some(pair) => write_one(pair),
+            None => shared.pending = true,
           }
         }
       }
 
       impl Source {
         pub fn drain(&self) {
+          let mut shared = self.shared.lock().unwrap();
+          shared.pending = false;
+          let Some(pair) = shared.pair.as_mut() else {
+            return;
+          };
           let mut buf = Vec::with_capacity(16);
-          match self.rec.lock().unwrap().read_to_end(&mut buf) {
+          match pair.rec.read_to_end(&mut buf) {
             Ok(_) => (),
             Err(err) => match err.kind() {
               io::ErrorKind::WouldBlock => {}
               other_kind => info!("PollEventSource.drain(): {other_kind}"),
             },
           }
+        }
+
+        // The pair, made now if this is the first registration; a send made before it is
+        // replayed so the poll sees it.
+        fn with_pair<R>(&self, f: impl FnOnce(&mut Pair) -> io::Result<R>) -> io::Result<R> {
+          let mut shared = self.shared.lock().unwrap();
+          if shared.pair.is_none() {
+            let mut pair = make_pair()?;
+            if shared.pending {
+              write_one(&mut pair);
+            }
+            shared.pair = Some(pair);
+          }
+          f(shared.pair.as_mut().unwrap())
         }
       }
 
@@ -108,11 +148,7 @@ macro_rules! socketpair_bridge {
           token: $mio::Token,
           interests: $mio::Interest,
         ) -> io::Result<()> {
-          self
-            .rec
-            .lock()
-            .unwrap()
-            .register(registry, token, interests)
+          self.with_pair(|pair| pair.rec.register(registry, token, interests))
         }
 
         fn reregister(
@@ -121,15 +157,14 @@ macro_rules! socketpair_bridge {
           token: $mio::Token,
           interests: $mio::Interest,
         ) -> io::Result<()> {
-          self
-            .rec
-            .lock()
-            .unwrap()
-            .reregister(registry, token, interests)
+          self.with_pair(|pair| pair.rec.reregister(registry, token, interests))
         }
 
         fn deregister(&mut self, registry: &$mio::Registry) -> io::Result<()> {
-          self.rec.lock().unwrap().deregister(registry)
+          match self.shared.lock().unwrap().pair.as_mut() {
+            Some(pair) => pair.rec.deregister(registry),
+            None => Ok(()),
+          }
         }
       }
     }
@@ -309,5 +344,66 @@ impl mio_06::Evented for NotificationReceiver {
 
   fn deregister(&self, poll: &mio_06::Poll) -> std::io::Result<()> {
     self.legacy_receiver.deregister(poll)
+  }
+}
+
+// CompoSuite-ROS patch tests: the socket pair is made on first registration, and what was sent
+// before it is not lost (nor what was drained replayed).
+#[cfg(test)]
+mod tests {
+  use std::time::Duration;
+
+  use mio1::{Events, Interest, Poll, Token};
+
+  use super::make_poll_channel;
+
+  fn readable_after_register(send_before: bool, drain_before: bool) -> bool {
+    let (mut source, sender) = make_poll_channel().unwrap();
+    if send_before {
+      sender.send();
+    }
+    if drain_before {
+      source.drain();
+    }
+    let mut poll = Poll::new().unwrap();
+    poll
+      .registry()
+      .register(&mut source, Token(7), Interest::READABLE)
+      .unwrap();
+    let mut events = Events::with_capacity(4);
+    poll
+      .poll(&mut events, Some(Duration::from_millis(50)))
+      .unwrap();
+    events
+      .iter()
+      .any(|e| e.token() == Token(7) && e.is_readable())
+  }
+
+  #[test]
+  fn a_send_before_the_first_registration_is_seen_by_the_poll() {
+    assert!(readable_after_register(true, false));
+    assert!(!readable_after_register(false, false));
+    assert!(!readable_after_register(true, true));
+  }
+
+  #[test]
+  fn a_send_after_registration_wakes_the_poll_and_drain_clears_it() {
+    let (mut source, sender) = make_poll_channel().unwrap();
+    let mut poll = Poll::new().unwrap();
+    poll
+      .registry()
+      .register(&mut source, Token(1), Interest::READABLE)
+      .unwrap();
+    let mut events = Events::with_capacity(4);
+    sender.send();
+    poll
+      .poll(&mut events, Some(Duration::from_millis(500)))
+      .unwrap();
+    assert!(events.iter().any(|e| e.token() == Token(1)));
+    source.drain();
+    poll
+      .poll(&mut events, Some(Duration::from_millis(50)))
+      .unwrap();
+    assert!(events.is_empty());
   }
 }

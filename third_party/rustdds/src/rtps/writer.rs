@@ -1665,12 +1665,17 @@ impl Writer {
     let first_keeper = if !self.like_stateless {
       // Regular stateful writer behavior
       // All readers have acked up to this point (SequenceNumber)
+      // CompoSuite-ROS patch: with no matched reader, nothing awaits repair, so everything
+      // counts as acknowledged and only the History depth is kept (for late joiners). 0.15.1
+      // took zero here, which kept every sample up to DEFAULT_WRITER_MAX_SAMPLES (8,192) in
+      // each unread Writer: in a process holding 64 environments, the ros_discovery_info
+      // Writer alone kept thousands of growing participant descriptions (~0.5 GB).
       let acked_by_all_readers = self
         .readers
         .values()
         .map(RtpsReaderProxy::acked_up_to_before)
         .min()
-        .unwrap_or_else(SequenceNumber::zero);
+        .unwrap_or_else(|| self.send_buffer.last_change_sequence_number().plus_1());
       // If all readers have acked all up to before 5, and depth is 5, we need
       // to keep samples 0..4, i.e. from acked_up_to_before - depth .
       let depth_keeper = if let Some(depth) = depth {
@@ -2946,6 +2951,42 @@ mod tests {
         self.writer.handle_timed_event(event);
         before - self.unsent()
       }
+    }
+
+    // CompoSuite-ROS patch test: once its only reader is gone, a KeepLast Writer's cleaning keeps
+    // its History depth, not every sample up to DEFAULT_WRITER_MAX_SAMPLES; a KeepAll Writer
+    // keeps all.
+    #[test]
+    fn a_writer_without_readers_keeps_only_its_history_depth() {
+      let retained_after_cleaning = |history| {
+        let qos = QosPolicyBuilder::new()
+          .reliability(Reliability::Reliable {
+            max_blocking_time: Duration::from_millis(100),
+          })
+          .history(history)
+          .durability(Durability::TransientLocal)
+          .build();
+        let mut f = Fixture::new(
+          EntityId::new([0, 0, 1], EntityKind::WRITER_WITH_KEY_USER_DEFINED),
+          qos.clone(),
+          EntityId::new([0, 0, 2], EntityKind::READER_WITH_KEY_USER_DEFINED),
+          &qos,
+          50,
+          8,
+          None,
+        );
+        f.writer.handle_cache_cleaning();
+        let with_reader = f.writer.send_buffer.retained_len();
+        f.writer.reader_lost(f.reader_guid);
+        f.writer.handle_cache_cleaning();
+        (with_reader, f.writer.send_buffer.retained_len())
+      };
+      // The reader acknowledged nothing: all 50 stay while it is matched.
+      assert_eq!(
+        retained_after_cleaning(History::KeepLast { depth: 3 }),
+        (50, 3)
+      );
+      assert_eq!(retained_after_cleaning(History::KeepAll), (50, 50));
     }
 
     // Built-in and user Writers alike answer an ACKNACK only after
