@@ -3,7 +3,7 @@ one DDS participant: the default) or `--isolate` (a process per node). Figures o
 asserted. Run through `scripts/bench-scale`, which builds the release binaries and enters the
 loopback-only namespace.
 
-    python tests/py/bench_scale.py --envs 1 8 32 64 [--isolate] [--idle 30] [--json]
+    python tests/py/bench_scale.py --envs 1 8 32 64 [--isolate | --processes K] [--idle 30] [--json]
 
 Per N: processes of the suite, RSS in all and per environment, the suite's idle CPU (% of one
 core) over `--idle` seconds once every environment answered, the seconds from launch until
@@ -82,13 +82,14 @@ def thread_cpu_ticks(root: int) -> dict[str, int]:
     return ticks
 
 
-def bench(n: int, isolate: bool, idle: float, steps: int, breakdown: bool) -> dict:
+def bench(n: int, isolate: bool, processes: int, idle: float, steps: int, breakdown: bool) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="bench_scale_"))
     domain = node_suite.random_domain()
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
     env["ROS_DOMAIN_ID"] = str(domain)
     os.environ["ROS_DOMAIN_ID"] = str(domain)
-    extra = (["--envs", str(n)] if n > 1 else []) + (["--isolate"] if isolate else [])
+    extra = (["--envs", str(n)] if n > 1 else []) + (["--isolate"] if isolate else []) \
+        + (["--processes", str(min(processes, n))] if processes > 1 and n > 1 else [])
     log = folder / "launch.stderr"
     started = time.monotonic()
     with open(log, "wb") as stderr:
@@ -149,7 +150,9 @@ def bench(n: int, isolate: bool, idle: float, steps: int, breakdown: bool) -> di
             launch.wait(timeout=60)
         except subprocess.TimeoutExpired:
             launch.kill()
-    return {"envs": n, "mode": "isolate" if isolate or n == 1 else "composed",
+    mode = ("isolate" if isolate or n == 1
+            else f"{min(processes, n)} procs" if processes > 1 else "composed")
+    return {"envs": n, "mode": mode,
             "processes": len(tree), "rss_mb": rss, "rss_per_env_mb": rss / n,
             "idle_cpu_percent": idle_cpu, "up_s": up_s, "answered_s": answered_s,
             "alone_steps_per_s": alone, "alone_p99_ms": 1e3 * float(np.percentile(latencies, 99)),
@@ -163,18 +166,20 @@ def main() -> None:
     parser.add_argument("--isolate", action="store_true", help="a process per node (the old way)")
     parser.add_argument("--idle", type=float, default=30.0, help="seconds of idle CPU measurement")
     parser.add_argument("--steps", type=int, default=500, help="steps of env_00 stepped alone")
+    parser.add_argument("--processes", type=int, default=1,
+                        help="composed environments split over this many processes")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--breakdown", action="store_true",
                         help="also print the idle CPU by thread name (where it goes)")
     args = parser.parse_args()
-    if any(n < 1 for n in args.envs) or args.idle <= 0 or args.steps < 1:
-        parser.error("--envs, --idle and --steps must be positive")
+    if any(n < 1 for n in args.envs) or args.idle <= 0 or args.steps < 1 or args.processes < 1:
+        parser.error("--envs, --idle, --steps and --processes must be positive")
     rows = []
     if not args.json:
         print("envs  mode      procs  RSS MB  per env  idle CPU  up s  answered s  alone steps/s (p99 ms)"
               "  together steps/s", flush=True)
     for n in args.envs:
-        r = bench(n, args.isolate, args.idle, args.steps, args.breakdown)
+        r = bench(n, args.isolate, args.processes, args.idle, args.steps, args.breakdown)
         rows.append(r)
         if not args.json:
             print(f"{r['envs']:4d}  {r['mode']:8s}  {r['processes']:5d}  {r['rss_mb']:6.0f}  "

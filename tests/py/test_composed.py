@@ -4,10 +4,13 @@ nodes in the graph (`ros2 node list`), no node process exists (the launcher's th
 nodes), each environment steps bit-identical to the in-process env, and a node that fails (the
 sim's `fault_panic` parameter) takes down only its environment, which launch starts again
 while the others go on stepping. The standard simulation interfaces (simulation_interfaces) answer
-in every environment's namespace as they do for separate processes."""
+in every environment's namespace as they do for separate processes. `--processes 2` splits the
+environments over two child processes; a SIGKILL of one restarts its share only."""
 
 from __future__ import annotations
 
+import os
+import signal
 import time
 from pathlib import Path
 
@@ -55,6 +58,10 @@ def test_every_node_is_a_ros_node_in_the_graph(suite):
         wanted = {(node, ns) for ns in NAMESPACES for node in ("sim", "task_manager", "reward")}
         agent.spin_until(lambda: wanted <= set(agent.node.get_node_names_and_namespaces()), 25.0,
                          "the nine nodes in rclpy's graph")
+        # Node names (ros_discovery_info) and endpoints (DDS discovery) arrive separately.
+        needed = {f"{ns}/{name}" for ns in NAMESPACES for name in ("reset", "sim/set_parameters")}
+        agent.spin_until(lambda: needed <= dict(agent.node.get_service_names_and_types()).keys(),
+                         25.0, "every environment's services in rclpy's graph")
         services = dict(agent.node.get_service_names_and_types())
         for ns in NAMESPACES:
             assert services[f"{ns}/reset"] == ["composuite_msgs/srv/Reset"]
@@ -135,3 +142,62 @@ def test_a_failing_node_restarts_its_environment_alone(suite):
         assert_same(episode(env_01, 3, 20), expected, "env_01 after its restart")
     with CompoSuiteRosEnv(TASK, NAMESPACES[2]) as env_02:
         assert_same(episode(env_02, 3, 5), expected[:6], "env_02")
+
+
+# --processes K: the composed environments split over K child processes, each a container on a
+# participant of its own. Same graph and numbers; a process killed outright (what composition
+# alone cannot survive) takes only its share down, and launch starts that share again.
+SPLIT_NS = "/cmpk"
+SPLIT_ENVS = 4
+SPLIT_NAMESPACES = [f"{SPLIT_NS}/env_{i:02}" for i in range(SPLIT_ENVS)]
+
+
+def share_processes(launcher: int) -> dict[str, int]:
+    """The launcher's `composuite launch --env-range A..B` children, by range."""
+    shares = {}
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            args = (proc / "cmdline").read_bytes().decode(errors="replace").split("\0")
+            parent = int((proc / "stat").read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        if parent == launcher and "--env-range" in args:
+            shares[args[args.index("--env-range") + 1]] = int(proc.name)
+    return shares
+
+
+def test_environments_split_over_processes_step_alike_and_a_killed_share_restarts(tmp_path):
+    with launch_running(tmp_path, SPLIT_NS, TASK, "--envs", str(SPLIT_ENVS), "--processes", "2",
+                        "--respawn", "1", "--respawn-delay", "0.5",
+                        service_mapping="fastdds") as suite:
+        assert "in 2 processes (one DDS participant each)" in suite.text()
+        shares = share_processes(suite.process.pid)
+        assert sorted(shares) == ["0..2", "2..4"], shares
+        agent = RclpyAgent(suite.domain)
+        try:
+            wanted = {(node, ns) for ns in SPLIT_NAMESPACES for node in ("sim", "task_manager", "reward")}
+            agent.spin_until(lambda: wanted <= set(agent.node.get_node_names_and_namespaces()), 25.0,
+                             "the twelve nodes in rclpy's graph")
+        finally:
+            agent.close()
+        expected = episode(CompoSuiteNativeEnv(TASK), 3, 10)
+        for ns in SPLIT_NAMESPACES:
+            with CompoSuiteRosEnv(TASK, ns) as env:
+                assert_same(episode(env, 3, 10), expected, ns)
+
+        os.kill(shares["0..2"], signal.SIGKILL)
+        suite.wait_for_log(f"environments 0..2 of {SPLIT_NS} (a process) exited on its own "
+                           "(killed by signal 9); starting it again in 0.5 s (restart 1 of 1)")
+        # The other share steps on meanwhile, bit for bit.
+        with CompoSuiteRosEnv(TASK, SPLIT_NAMESPACES[3]) as env_03:
+            assert_same(episode(env_03, 3, 10), expected, "env_03 while 0..2 restarts")
+        deadline = time.monotonic() + 20
+        while suite.text().count(f"{SPLIT_NAMESPACES[0]}/sim up") < 2:
+            assert time.monotonic() < deadline, f"env_00 did not come back:\n{suite.text()[-3000:]}"
+            time.sleep(0.1)
+        assert suite.process.poll() is None, "the launcher goes on"
+        with CompoSuiteRosEnv(TASK, SPLIT_NAMESPACES[0], timeout=20.0) as env_00:
+            assert_same(episode(env_00, 3, 10), expected, "env_00 after its process restarted")
+    assert share_processes(suite.process.pid) == {}, "share processes left running"

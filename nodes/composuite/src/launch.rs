@@ -7,10 +7,14 @@
 //! environment, or with `--isolate`, every node is a child process of its own — this same
 //! executable run as `composuite node KIND --ros-args ...`, so the launcher never looks for
 //! binaries on a path — and signals are passed on; a node that dies is started again
-//! (`--respawn`, like `respawn=True` in `ros2 launch`). Past the respawn limit, or when time is
+//! (`--respawn`, like `respawn=True` in `ros2 launch`). `--processes K` splits the composed
+//! environments over K child processes (this executable run as `composuite launch` with a
+//! hidden `--env-range`), each a container on its own participant, restarted as a whole if it
+//! dies. Past the respawn limit, or when time is
 //! up, every node is stopped (SIGINT, then SIGKILL after a grace period) and the launcher exits
 //! with a code that says what happened. A recorder is always a process of its own.
 
+use std::ops::Range;
 use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus};
 use std::time::{Duration, Instant};
@@ -64,6 +68,16 @@ pub struct LaunchArgs {
     /// node killed (SIGKILL) takes only itself down.
     #[arg(long)]
     isolate: bool,
+    /// Split the composed environments over this many processes, each holding a contiguous
+    /// share of them on a DDS participant of its own (e.g. one per NUMA node or core group).
+    /// A process that dies (even SIGKILL) is started again with its environments (--respawn);
+    /// the other processes go on. Not with --isolate.
+    #[arg(long, default_value_t = 1)]
+    processes: usize,
+    /// The environments this process holds, START..END of --envs (set by a launcher that
+    /// splits them over --processes; not for users).
+    #[arg(long, hide = true, value_name = "START..END")]
+    env_range: Option<String>,
     /// Seed of the first episode (environment i: seed + i) [default: 0].
     #[arg(long)]
     seed: Option<u64>,
@@ -122,10 +136,12 @@ pub struct LaunchArgs {
 }
 
 struct Running {
-    kind: NodeKind,
-    namespace: String,
-    /// The `--ros-args` it was started with (and is started again with).
-    arguments: Vec<String>,
+    /// What it is, for messages: "sim in /env_00", "environments 0..4 of /train".
+    what: String,
+    /// A recorder: never started again (its bag exists), stopped after the environments.
+    recorder: bool,
+    /// Its command line after the executable (it is started again with the same).
+    argv: Vec<String>,
     child: Child,
     /// Times it was started again.
     restarts: u32,
@@ -176,6 +192,18 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
     if !(1..=100).contains(&args.envs) {
         return Err(format!("--envs {} is invalid; valid: 1 to 100", args.envs));
     }
+    if !(1..=args.envs).contains(&args.processes) {
+        return Err(format!(
+            "--processes {} is invalid; valid: 1 to --envs ({})",
+            args.processes, args.envs
+        ));
+    }
+    if args.processes > 1 && !args.composed() {
+        return Err(
+            "--processes needs composed environments: --envs 2 or more, without --isolate".into(),
+        );
+    }
+    args.env_indices()?;
     if args.horizon == Some(0) {
         return Err("--horizon must be at least 1".into());
     }
@@ -231,6 +259,27 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
         return Err(format!("--params-file {}: no such file", f.display()));
     }
     Ok(())
+}
+
+/// A node's command line after the executable: `node KIND --ros-args ...`.
+fn node_argv(kind: NodeKind, args: &LaunchArgs, namespace: &str, index: usize) -> Vec<String> {
+    let mut argv = vec!["node".to_string(), kind.name().to_string()];
+    argv.extend(node_arguments(args, kind, namespace, index));
+    argv
+}
+
+/// `envs` environments in `processes` contiguous shares, the larger ones first.
+fn split_environments(envs: usize, processes: usize) -> Vec<Range<usize>> {
+    let (share, larger) = (envs / processes, envs % processes);
+    let mut start = 0;
+    (0..processes)
+        .map(|k| {
+            let end = start + share + usize::from(k < larger);
+            let range = start..end;
+            start = end;
+            range
+        })
+        .collect()
 }
 
 /// The `--ros-args` of one node.
@@ -369,13 +418,24 @@ impl Suite {
         if args.record.is_some() {
             let namespace = env_namespace(&args.namespace, 0, 1);
             suite.add(
-                NodeKind::Recorder,
-                namespace,
-                node_arguments(args, NodeKind::Recorder, "/", 0),
+                format!("{} in {namespace}", NodeKind::Recorder),
+                true,
+                node_argv(NodeKind::Recorder, args, "/", 0),
             )?;
         }
+        if args.composed() && args.processes > 1 {
+            for range in split_environments(args.envs, args.processes) {
+                let what = format!(
+                    "environments {}..{} of {} (a process)",
+                    range.start, range.end, args.namespace
+                );
+                suite.add(what, false, args.container_process_argv(&range))?;
+            }
+            return Ok(suite);
+        }
         if args.composed() {
-            let environments = (0..args.envs)
+            let environments = args
+                .env_indices()?
                 .map(|index| {
                     let namespace = env_namespace(&args.namespace, index, args.envs);
                     EnvironmentLaunch {
@@ -406,26 +466,22 @@ impl Suite {
         for index in 0..args.envs {
             let namespace = env_namespace(&args.namespace, index, args.envs);
             for kind in NodeKind::ALL {
-                let arguments = node_arguments(args, kind, &namespace, index);
-                suite.add(kind, namespace.clone(), arguments)?;
+                let argv = node_argv(kind, args, &namespace, index);
+                suite.add(format!("{kind} in {namespace}"), false, argv)?;
             }
         }
         Ok(suite)
     }
 
-    /// Start one node; on failure stop the ones started and say why.
-    fn add(
-        &mut self,
-        kind: NodeKind,
-        namespace: String,
-        arguments: Vec<String>,
-    ) -> Result<(), String> {
-        match self.spawn(kind, &arguments) {
+    /// Start one child process (a node, or a share of the composed environments); on failure
+    /// stop the ones started and say why.
+    fn add(&mut self, what: String, recorder: bool, argv: Vec<String>) -> Result<(), String> {
+        match self.spawn(recorder, &argv) {
             Ok(child) => {
                 self.nodes.push(Running {
-                    kind,
-                    namespace,
-                    arguments,
+                    what,
+                    recorder,
+                    argv,
                     child,
                     restarts: 0,
                     died_at: None,
@@ -435,20 +491,16 @@ impl Suite {
             }
             Err(e) => {
                 stop_all(&mut self.nodes);
-                Err(format!("cannot start {kind} in {namespace}: {e}"))
+                Err(format!("cannot start {what}: {e}"))
             }
         }
     }
 
-    fn spawn(&self, kind: NodeKind, arguments: &[String]) -> std::io::Result<Child> {
+    fn spawn(&self, recorder: bool, argv: &[String]) -> std::io::Result<Child> {
         use std::os::unix::process::CommandExt;
         let mut command = Command::new(&self.exe);
-        command.arg("node").arg(kind.name()).args(arguments);
-        let niceness = if kind == NodeKind::Recorder {
-            RECORDER_NICENESS
-        } else {
-            0
-        };
+        command.args(argv);
+        let niceness = if recorder { RECORDER_NICENESS } else { 0 };
         let launcher = std::process::id() as libc::pid_t;
         // SAFETY: the closure runs in the forked child before exec and makes only system calls
         // that are async-signal-safe (setpgid, prctl, getppid, getpriority, setpriority).
@@ -483,7 +535,7 @@ impl Suite {
                 && let Ok(Some(status)) = n.child.try_wait()
             {
                 let death = n.death(status);
-                if n.kind == NodeKind::Recorder {
+                if n.recorder {
                     // Its bag directory exists now, so it cannot start again; the
                     // environments go on (what it wrote stays readable, see `bag reindex`).
                     eprintln!("composuite launch: {death}; the suite goes on without recording");
@@ -506,9 +558,9 @@ impl Suite {
             }
             let n = &self.nodes[index];
             if !n.gone && n.died_at.is_some_and(|t| now >= t + delay) {
-                let child = self.spawn(n.kind, &n.arguments).map_err(|e| {
-                    format!("cannot start {} in {} again: {e}", n.kind, n.namespace)
-                })?;
+                let child = self
+                    .spawn(n.recorder, &n.argv)
+                    .map_err(|e| format!("cannot start {} again: {e}", n.what))?;
                 let n = &mut self.nodes[index];
                 n.child = child;
                 n.restarts += 1;
@@ -539,6 +591,69 @@ impl LaunchArgs {
         self.envs > 1 && !self.isolate
     }
 
+    /// The environments this process holds: `--env-range`, or all of them.
+    fn env_indices(&self) -> Result<Range<usize>, String> {
+        let Some(range) = &self.env_range else {
+            return Ok(0..self.envs);
+        };
+        let parsed = range
+            .split_once("..")
+            .and_then(|(a, b)| Some(a.parse::<usize>().ok()?..b.parse::<usize>().ok()?));
+        match parsed {
+            Some(r) if r.start < r.end && r.end <= self.envs => Ok(r),
+            _ => Err(format!(
+                "--env-range {range} is invalid; START..END with START < END <= --envs ({})",
+                self.envs
+            )),
+        }
+    }
+
+    /// The command line of a child process holding `range` of the composed environments: the
+    /// options every environment's nodes get, and nothing the launcher keeps for itself (the
+    /// recorder, --duration, --processes).
+    fn container_process_argv(&self, range: &Range<usize>) -> Vec<String> {
+        let mut argv: Vec<String> = vec![
+            "launch".into(),
+            "--namespace".into(),
+            self.namespace.clone(),
+            "--envs".into(),
+            self.envs.to_string(),
+            "--env-range".into(),
+            format!("{}..{}", range.start, range.end),
+            "--respawn".into(),
+            self.respawn.to_string(),
+            "--respawn-delay".into(),
+            format!("{:?}", self.respawn_delay),
+            "--log-level".into(),
+            self.log_level.clone(),
+        ];
+        let mut option = |flag: &str, value: Option<String>| {
+            if let Some(value) = value {
+                argv.extend([flag.to_string(), value]);
+            }
+        };
+        option("--task", self.task.clone());
+        option("--mode", self.mode.clone());
+        option("--seed", self.seed.map(|s| s.to_string()));
+        option("--horizon", self.horizon.map(|h| h.to_string()));
+        option(
+            "--reward-scale",
+            self.reward_scale.map(|r| format!("{r:?}")),
+        );
+        option("--service-mapping", self.service_mapping.clone());
+        option(
+            "--params-file",
+            self.params_file.as_ref().map(|f| f.display().to_string()),
+        );
+        if self.sparse_rewards {
+            argv.push("--sparse-rewards".into());
+        }
+        if self.auto_reset {
+            argv.push("--auto-reset".into());
+        }
+        argv
+    }
+
     /// One lockstep environment of `task` in `namespace`, everything else at its default.
     pub(crate) fn one_environment(task: &str, namespace: &str, log_level: &str) -> LaunchArgs {
         LaunchArgs {
@@ -547,6 +662,8 @@ impl LaunchArgs {
             namespace: namespace.into(),
             envs: 1,
             isolate: false,
+            processes: 1,
+            env_range: None,
             seed: None,
             horizon: None,
             sparse_rewards: false,
@@ -574,11 +691,13 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
     let mut suite = Suite::start(args)?;
     eprintln!(
         "composuite launch: {} environment(s) × 3 nodes started {}{}; Ctrl-C stops them",
-        args.envs,
-        if args.composed() {
-            "in this process (one DDS participant)"
+        args.env_indices()?.len(),
+        if args.composed() && args.processes > 1 {
+            format!("in {} processes (one DDS participant each)", args.processes)
+        } else if args.composed() {
+            "in this process (one DDS participant)".to_string()
         } else {
-            "as processes"
+            "as processes".to_string()
         },
         match &args.record {
             Some(dir) => format!(", recording into {}", dir.display()),
@@ -614,12 +733,7 @@ pub fn run(args: &LaunchArgs) -> Result<(), String> {
 impl Running {
     /// "sim in /env_00 exited on its own (killed by signal 9)".
     fn death(&self, status: ExitStatus) -> String {
-        format!(
-            "{} in {} exited on its own ({})",
-            self.kind,
-            self.namespace,
-            describe(status)
-        )
+        format!("{} exited on its own ({})", self.what, describe(status))
     }
 }
 
@@ -639,7 +753,7 @@ fn stop_all(nodes: &mut [Running]) -> bool {
     let (recorders, environments): (Vec<&mut Running>, Vec<&mut Running>) = nodes
         .iter_mut()
         .filter(|n| n.died_at.is_none())
-        .partition(|n| n.kind == NodeKind::Recorder);
+        .partition(|n| n.recorder);
     if !recorders.is_empty() && !environments.is_empty() {
         std::thread::sleep(RECORDER_SETTLE);
     }
@@ -665,18 +779,13 @@ fn stop_group(mut nodes: Vec<&mut Running>) -> bool {
             Some(s) if s.success() => {}
             Some(s) => {
                 clean = false;
-                eprintln!(
-                    "composuite launch: {} in {}: {}",
-                    n.kind,
-                    n.namespace,
-                    describe(s)
-                );
+                eprintln!("composuite launch: {}: {}", n.what, describe(s));
             }
             None => {
                 clean = false;
                 eprintln!(
-                    "composuite launch: {} in {} did not stop within {:?}; killing it",
-                    n.kind, n.namespace, GRACE
+                    "composuite launch: {} did not stop within {:?}; killing it",
+                    n.what, GRACE
                 );
                 signal(&n.child, libc::SIGKILL);
                 let _ = n.child.wait();
@@ -696,5 +805,97 @@ mod tests {
         assert_eq!(env_namespace("/train", 0, 1), "/train");
         assert_eq!(env_namespace("/", 3, 4), "/env_03");
         assert_eq!(env_namespace("/train/", 1, 2), "/train/env_01");
+    }
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        launch: LaunchArgs,
+    }
+
+    fn parse(argv: &[&str]) -> LaunchArgs {
+        use clap::Parser;
+        Cli::try_parse_from(std::iter::once("launch").chain(argv.iter().copied()))
+            .unwrap()
+            .launch
+    }
+
+    #[test]
+    fn environments_split_into_contiguous_shares() {
+        assert_eq!(split_environments(8, 2), [0..4, 4..8]);
+        assert_eq!(split_environments(7, 3), [0..3, 3..5, 5..7]);
+        assert_eq!(split_environments(3, 3), [0..1, 1..2, 2..3]);
+        assert_eq!(split_environments(64, 1), vec![Range { start: 0, end: 64 }]);
+    }
+
+    // A share's process gives every one of its nodes the arguments the launcher would have.
+    #[test]
+    fn a_share_process_gives_its_nodes_the_launchers_arguments() {
+        let parent = parse(&[
+            "--task",
+            "Jaco/plate/wall/push",
+            "--mode",
+            "realtime",
+            "--namespace",
+            "/train",
+            "--envs",
+            "5",
+            "--processes",
+            "2",
+            "--seed",
+            "7",
+            "--horizon",
+            "80",
+            "--sparse-rewards",
+            "--reward-scale",
+            "2.5",
+            "--service-mapping",
+            "cyclone",
+            "--auto-reset",
+            "--log-level",
+            "warn",
+            "--respawn",
+            "4",
+            "--respawn-delay",
+            "0.25",
+            "--duration",
+            "9",
+        ]);
+        for range in split_environments(parent.envs, parent.processes) {
+            let argv = parent.container_process_argv(&range);
+            assert_eq!(argv[0], "launch");
+            let argv: Vec<&str> = argv[1..].iter().map(String::as_str).collect();
+            let child = parse(&argv);
+            assert_eq!(child.env_indices(), Ok(range.clone()));
+            assert!(child.composed() && child.processes == 1 && child.duration.is_none());
+            assert_eq!((child.respawn, child.respawn_delay), (4, 0.25));
+            for index in range {
+                let namespace = env_namespace("/train", index, 5);
+                for kind in NodeKind::ALL {
+                    assert_eq!(
+                        node_arguments(&child, kind, &namespace, index),
+                        node_arguments(&parent, kind, &namespace, index),
+                        "{kind} of environment {index}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_processes_and_ranges_are_refused_with_what_is_valid() {
+        let refused = |argv: &[&str]| validate(&parse(argv)).unwrap_err();
+        assert!(refused(&["--envs", "4", "--processes", "5"]).contains("valid: 1 to --envs (4)"));
+        assert!(refused(&["--envs", "4", "--processes", "0"]).contains("--processes 0"));
+        assert!(
+            refused(&["--envs", "4", "--processes", "2", "--isolate"])
+                .contains("without --isolate")
+        );
+        assert!(
+            refused(&["--envs", "4", "--env-range", "3..3"]).contains("START < END <= --envs (4)")
+        );
+        assert!(refused(&["--envs", "4", "--env-range", "2..9"]).contains("--env-range 2..9"));
+        assert!(refused(&["--envs", "4", "--env-range", "x"]).contains("START..END"));
+        assert!(validate(&parse(&["--envs", "4", "--processes", "4"])).is_ok());
     }
 }
