@@ -1,8 +1,8 @@
 use std::{
   cell::RefCell,
-  collections::{btree_map::Entry, BTreeMap},
+  collections::{btree_map::Entry, BTreeMap, HashMap},
   rc::Rc,
-  sync::mpsc::TrySendError,
+  sync::{atomic::Ordering, mpsc::TrySendError},
 };
 
 use enumflags2::BitFlags;
@@ -14,7 +14,11 @@ use crate::{
   messages::{protocol_version::ProtocolVersion, submessages::submessages::*, vendor_id::VendorId},
   network::udp_listener::PacketOrigin,
   polling::WakeSender,
-  rtps::{reader::Reader, transmit::InterfaceObservations, Message, Submessage, SubmessageBody},
+  rtps::{
+    reader::{Reader, MATCHED_WRITERS_GENERATION},
+    transmit::InterfaceObservations,
+    Message, Submessage, SubmessageBody,
+  },
   structure::{
     entity::RTPSEntity,
     guid::{EntityId, GuidPrefix, GUID},
@@ -110,6 +114,13 @@ impl Default for MessageReceiverState<'_> {
 /// Entities. (See RTPS spec Section 8.3.7)
 pub(crate) struct MessageReceiver {
   pub available_readers: BTreeMap<EntityId, Reader>,
+  // CompoSuite-ROS patch: for writer submessages addressed to no Reader in particular, which
+  // Readers the sending Writer feeds, by Writer; valid while MATCHED_WRITERS_GENERATION equals
+  // `readers_fed_generation`. 0.15.1 found them by testing every Reader's every matched Writer
+  // for each such submessage: in a participant holding 64 environments' ~3,800 Readers that
+  // was ~1.5 M instructions per environment step, a quarter of the suite's CPU.
+  readers_fed: HashMap<GUID, Vec<EntityId>>,
+  readers_fed_generation: u64,
   // GuidPrefix sent in this channel needs to be RTPSMessage source_guid_prefix. Writer needs this
   // to locate RTPSReaderProxy if negative acknack.
   acknack_sender: WakeSender<(GuidPrefix, AckSubmessage)>,
@@ -153,6 +164,8 @@ impl MessageReceiver {
   ) -> Self {
     Self {
       available_readers: BTreeMap::new(),
+      readers_fed: HashMap::new(),
+      readers_fed_generation: u64::MAX,
       acknack_sender,
       spdp_liveness_sender,
       security_plugins,
@@ -217,6 +230,7 @@ impl MessageReceiver {
   }
 
   pub fn add_reader(&mut self, new_reader: Reader) {
+    MATCHED_WRITERS_GENERATION.fetch_add(1, Ordering::Relaxed);
     let eid = new_reader.guid().entity_id;
     match self.available_readers.entry(eid) {
       Entry::Occupied(_) => warn!("Already have Reader {eid:?} - not adding."),
@@ -227,7 +241,37 @@ impl MessageReceiver {
   }
 
   pub fn remove_reader(&mut self, old_reader_guid: GUID) -> Option<Reader> {
+    MATCHED_WRITERS_GENERATION.fetch_add(1, Ordering::Relaxed);
     self.available_readers.remove(&old_reader_guid.entity_id)
+  }
+
+  // CompoSuite-ROS patch: the Readers that take writer submessages from `writer` when they
+  // name no Reader: those matched with it, and the two built-in exceptions (the SPDP reader
+  // takes every SPDP writer; the stateless participant reader has no matched writers).
+  fn readers_fed_by(&mut self, writer: GUID) -> Vec<EntityId> {
+    let generation = MATCHED_WRITERS_GENERATION.load(Ordering::Relaxed);
+    if generation != self.readers_fed_generation {
+      self.readers_fed.clear();
+      self.readers_fed_generation = generation;
+    }
+    let readers = &self.available_readers;
+    self
+      .readers_fed
+      .entry(writer)
+      .or_insert_with(|| {
+        readers
+          .values()
+          .filter(|reader| {
+            reader.contains_writer_guid(writer)
+              || (writer.entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER
+                && reader.entity_id() == EntityId::SPDP_BUILTIN_PARTICIPANT_READER)
+              || (writer.entity_id == EntityId::P2P_BUILTIN_PARTICIPANT_STATELESS_WRITER
+                && reader.entity_id() == EntityId::P2P_BUILTIN_PARTICIPANT_STATELESS_READER)
+          })
+          .map(Reader::entity_id)
+          .collect()
+      })
+      .clone()
   }
 
   pub fn reader_mut(&mut self, reader_id: EntityId) -> Option<&mut Reader> {
@@ -400,23 +444,13 @@ impl MessageReceiver {
             if receiver_entity_id == EntityId::UNKNOWN {
               let sending_writer_entity_id = submessage.sender_entity_id();
 
-              let available_target_entity_ids: Vec<EntityId> = self
-                .available_readers
-                .values()
-                .filter(|target_reader| {
-                  // Reader must contain the writer
-                  target_reader.contains_writer(sending_writer_entity_id)
-                    // But there are two exceptions:
-                    // 1. SPDP reader must read from unknown SPDP writers
-                    //  TODO: This logic here is uglyish. Can we just inject a
-                    //  presupposed writer (proxy) to the built-in reader as it is created?
-                    || (sending_writer_entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER
-                      && target_reader.entity_id() == EntityId::SPDP_BUILTIN_PARTICIPANT_READER)
-                    // 2. ParticipantStatelessReader does not contain any writers, since it is stateless
-                    || (sending_writer_entity_id == EntityId::P2P_BUILTIN_PARTICIPANT_STATELESS_WRITER
-                      && target_reader.entity_id() == EntityId::P2P_BUILTIN_PARTICIPANT_STATELESS_READER)
-                })
-                .map(Reader::entity_id).collect();
+              // CompoSuite-ROS patch: the Readers matched with exactly this Writer (its
+              // GUID: the message's source prefix and the writer id), from a cache; 0.15.1
+              // scanned every Reader for a matched Writer with this entity id, any prefix.
+              let available_target_entity_ids = self.readers_fed_by(GUID {
+                prefix: self.source_guid_prefix,
+                entity_id: sending_writer_entity_id,
+              });
 
               match security_plugins_clone {
                 None => {
@@ -1203,50 +1237,7 @@ mod tests {
     let entity =
       EntityId::create_custom_entity_id([0, 0, 0], EntityKind::READER_WITH_KEY_USER_DEFINED);
     let reader_guid = GUID::new_with_prefix_and_id(target_gui_prefix, entity);
-
-    let (notification_sender, _notification_receiver) =
-      crate::mio_source::notification_channel(100);
-    let (_notification_event_source, notification_event_sender) =
-      mio_source::make_poll_channel().unwrap();
-    let data_reader_waker = Arc::new(Mutex::new(None));
-
-    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
-    let (participant_status_sender, _participant_status_receiver) =
-      sync_status_channel(16).unwrap();
-
-    let (_reader_command_sender, reader_command_receiver) =
-      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
-
-    let qos_policy = QosPolicies::qos_none();
-
-    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
-
-    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
-      "test".to_string(),
-      TypeDesc::new("test".to_string()),
-      &qos_policy,
-    );
-    let reader_ing = ReaderIngredients {
-      guid: reader_guid,
-      notification_sender,
-      status_sender,
-      topic_name: "test".to_string(),
-      topic_cache_handle: topic_cache_handle.clone(),
-      like_stateless: false,
-      qos_policy,
-      data_reader_command_receiver: reader_command_receiver,
-      data_reader_waker: data_reader_waker.clone(),
-      poll_event_sender: notification_event_sender,
-      security_plugins: None,
-      discovery_notify: None,
-    };
-
-    let mut new_reader = Reader::new(
-      reader_ing,
-      Rc::new(UDPSender::new_with_random_port().unwrap()),
-      new_shared_timer(),
-      participant_status_sender,
-    );
+    let mut new_reader = test_reader(reader_guid);
 
     // Add info of the writer to the reader
     new_reader.matched_writer_add(
@@ -1292,6 +1283,104 @@ mod tests {
 
     // Verify the color in the deserialized value is correct
     assert_eq!(deserialized_shape_type.color, "RED");
+  }
+
+  // A stateful Reader of topic "test" with no matched Writer.
+  fn test_reader(reader_guid: GUID) -> Reader {
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let data_reader_waker = Arc::new(Mutex::new(None));
+
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+
+    let qos_policy = QosPolicies::qos_none();
+
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      "test".to_string(),
+      TypeDesc::new("test".to_string()),
+      &qos_policy,
+    );
+    let reader_ing = ReaderIngredients {
+      guid: reader_guid,
+      notification_sender,
+      status_sender,
+      topic_name: "test".to_string(),
+      topic_cache_handle: topic_cache_handle.clone(),
+      like_stateless: false,
+      qos_policy,
+      data_reader_command_receiver: reader_command_receiver,
+      data_reader_waker: data_reader_waker.clone(),
+      poll_event_sender: notification_event_sender,
+      security_plugins: None,
+      discovery_notify: None,
+    };
+
+    Reader::new(
+      reader_ing,
+      Rc::new(UDPSender::new_with_random_port().unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    )
+  }
+
+  // CompoSuite-ROS patch test: the cache of the Readers a Writer feeds follows matching and
+  // unmatching, and tells Writers apart by their whole GUID.
+  #[test]
+  fn readers_fed_by_a_writer_follow_its_matching() {
+    let own = GuidPrefix::new(&[1; 12]);
+    let waker = LoopWaker::new();
+    let (acknack_sender, _acknack_receiver) = wake_channel(8, &waker);
+    let (spdp_liveness_sender, _spdp_liveness_receiver) = wake_channel(8, &waker);
+    let mut receiver = MessageReceiver::new(
+      own,
+      acknack_sender,
+      spdp_liveness_sender,
+      None,
+      Rc::new(RefCell::new(InterfaceObservations::new())),
+    );
+    let writer_id =
+      EntityId::create_custom_entity_id([0, 0, 1], EntityKind::WRITER_WITH_KEY_USER_DEFINED);
+    let writer = GUID::new(GuidPrefix::new(&[2; 12]), writer_id);
+    let same_id_elsewhere = GUID::new(GuidPrefix::new(&[3; 12]), writer_id);
+    let reader_ids: Vec<EntityId> = (1..=2)
+      .map(|i| {
+        EntityId::create_custom_entity_id([0, 0, i], EntityKind::READER_WITH_KEY_USER_DEFINED)
+      })
+      .collect();
+    for id in &reader_ids {
+      receiver.add_reader(test_reader(GUID::new_with_prefix_and_id(own, *id)));
+    }
+    assert_eq!(receiver.readers_fed_by(writer), []);
+    let match_writer = |receiver: &mut MessageReceiver, id: EntityId| {
+      receiver.reader_mut(id).unwrap().matched_writer_add(
+        writer,
+        EntityId::UNKNOWN,
+        vec![],
+        vec![],
+        &QosPolicies::qos_none(),
+      );
+    };
+    match_writer(&mut receiver, reader_ids[1]);
+    assert_eq!(receiver.readers_fed_by(writer), [reader_ids[1]]);
+    match_writer(&mut receiver, reader_ids[0]);
+    assert_eq!(receiver.readers_fed_by(writer), reader_ids);
+    assert_eq!(receiver.readers_fed_by(same_id_elsewhere), []);
+    receiver
+      .reader_mut(reader_ids[0])
+      .unwrap()
+      .remove_writer_proxy(writer);
+    assert_eq!(receiver.readers_fed_by(writer), [reader_ids[1]]);
+    receiver.remove_reader(GUID::new_with_prefix_and_id(own, reader_ids[1]));
+    assert_eq!(receiver.readers_fed_by(writer), []);
   }
 
   #[test]

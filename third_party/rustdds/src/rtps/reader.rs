@@ -1,8 +1,16 @@
+// CompoSuite-ROS patch: bumped whenever a Reader's set of matched Writers gains or loses one,
+// or a Reader comes or goes, so that MessageReceiver knows when its cache of "the Readers each
+// Writer feeds" is stale.
+pub(crate) static MATCHED_WRITERS_GENERATION: AtomicU64 = AtomicU64::new(0);
+
 use std::{
   collections::BTreeMap,
   fmt, iter,
   rc::Rc,
-  sync::{Arc, Mutex, MutexGuard},
+  sync::{
+    atomic::{AtomicU64, Ordering},
+    Arc, Mutex, MutexGuard,
+  },
   task::Waker,
   time::Duration as StdDuration,
 };
@@ -461,6 +469,7 @@ impl Reader {
       0
     } else {
       self.matched_writers.insert(proxy.remote_writer_guid, proxy);
+      MATCHED_WRITERS_GENERATION.fetch_add(1, Ordering::Relaxed);
       1
     }
   }
@@ -468,6 +477,7 @@ impl Reader {
   pub fn remove_writer_proxy(&mut self, writer_guid: GUID) {
     if self.matched_writers.contains_key(&writer_guid) {
       self.matched_writers.remove(&writer_guid);
+      MATCHED_WRITERS_GENERATION.fetch_add(1, Ordering::Relaxed);
       self
         .acquire_the_topic_cache_guard()
         .forget_reliable_writer(writer_guid);
@@ -499,6 +509,13 @@ impl Reader {
     }
   }
 
+  // CompoSuite-ROS patch: whether this (stateful) Reader is matched with exactly this Writer.
+  pub fn contains_writer_guid(&self, writer: GUID) -> bool {
+    !self.like_stateless && self.matched_writers.contains_key(&writer)
+  }
+
+  // (CompoSuite-ROS patch: used only by the security build since contains_writer_guid.)
+  #[cfg_attr(not(feature = "security"), allow(dead_code))]
   pub fn contains_writer(&self, entity_id: EntityId) -> bool {
     if !self.like_stateless {
       self
