@@ -3,20 +3,21 @@ one DDS participant: the default) or `--isolate` (a process per node). Figures o
 asserted. Run through `scripts/bench-scale`, which builds the release binaries and enters the
 loopback-only namespace.
 
-    python tests/py/bench_scale.py --envs 1 8 32 64 [--isolate | --processes K] [--idle 30] [--json]
+    python tests/py/bench_scale.py --envs 1 8 32 64 [--isolate | --processes K] [--agents K] [--idle 30] [--json]
 
 Per N: processes of the suite, RSS in all and per environment, the suite's idle CPU (% of one
 core) over `--idle` seconds once every environment answered, the seconds from launch until
 every node said it is up and until every environment answered a reset (an rclpy agent), the
 lockstep steps/s of env_00 stepped alone by one `CompoSuiteRosEnv` while the others idle (and
 its p99 step), and the aggregate steps/s with every environment stepped together by one
-`CompoSuiteRosVectorEnv`.
+`CompoSuiteRosVectorEnv` (or, with `--agents K`, by K agent processes at once).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import os
 import signal
 import subprocess
@@ -82,7 +83,50 @@ def thread_cpu_ticks(root: int) -> dict[str, int]:
     return ticks
 
 
-def bench(n: int, isolate: bool, processes: int, idle: float, steps: int, breakdown: bool) -> dict:
+def agent_process(namespaces: list[str], steps: int, ready, done) -> None:
+    """One agent of `step_together`: a vector env over its environments, reset, then `steps`
+    steps once every agent is ready; its elapsed seconds go to `done`."""
+    vector = CompoSuiteRosVectorEnv(namespaces, TASK, timeout=60.0)
+    vector.reset(seed=0)
+    rng = np.random.default_rng(len(namespaces))
+    ready.wait()
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        vector.step(rng.uniform(-1, 1, (len(namespaces), 8)))
+    done.put(time.perf_counter() - t0)
+    vector.close()
+
+
+def step_together(namespaces: list[str], steps: int, agents: int) -> float:
+    """Aggregate lockstep steps/s with every environment stepped at once: one vector env over all
+    (agents = 1), or `agents` processes each stepping every agents-th environment."""
+    agents = min(agents, len(namespaces))
+    if agents == 1:
+        vector = CompoSuiteRosVectorEnv(namespaces, TASK, timeout=60.0)
+        vector.reset(seed=0)
+        rng = np.random.default_rng(0)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            vector.step(rng.uniform(-1, 1, (len(namespaces), 8)))
+        elapsed = time.perf_counter() - t0
+        vector.close()
+        return steps * len(namespaces) / elapsed
+    context = multiprocessing.get_context("spawn")
+    ready, done = context.Barrier(agents + 1), context.Queue()
+    workers = [context.Process(target=agent_process,
+                               args=(namespaces[k::agents], steps, ready, done))
+               for k in range(agents)]
+    for w in workers:
+        w.start()
+    ready.wait(timeout=300)
+    elapsed = max(done.get(timeout=600) for _ in workers)
+    for w in workers:
+        w.join(timeout=60)
+    return steps * len(namespaces) / elapsed
+
+
+def bench(n: int, isolate: bool, processes: int, agents: int, idle: float, steps: int,
+          breakdown: bool) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="bench_scale_"))
     domain = node_suite.random_domain()
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
@@ -136,14 +180,7 @@ def bench(n: int, isolate: bool, processes: int, idle: float, steps: int, breakd
                 if terminated or truncated:
                     single.reset()
             alone = steps / (time.perf_counter() - t0)
-        vector = CompoSuiteRosVectorEnv(namespaces, TASK, timeout=60.0)
-        vector.reset(seed=0)
-        vector_steps = max(20, steps // n)
-        t0 = time.perf_counter()
-        for _ in range(vector_steps):
-            vector.step(rng.uniform(-1, 1, (n, 8)))
-        together = vector_steps * n / (time.perf_counter() - t0)
-        vector.close()
+        together = step_together(namespaces, max(20, steps // n), agents)
     finally:
         launch.send_signal(signal.SIGINT)
         try:
@@ -168,18 +205,22 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=500, help="steps of env_00 stepped alone")
     parser.add_argument("--processes", type=int, default=1,
                         help="composed environments split over this many processes")
+    parser.add_argument("--agents", type=int, default=1,
+                        help="step all environments with this many agent processes (each a vector "
+                             "env over every K-th environment) instead of one")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--breakdown", action="store_true",
                         help="also print the idle CPU by thread name (where it goes)")
     args = parser.parse_args()
-    if any(n < 1 for n in args.envs) or args.idle <= 0 or args.steps < 1 or args.processes < 1:
-        parser.error("--envs, --idle, --steps and --processes must be positive")
+    if any(n < 1 for n in args.envs) or args.idle <= 0 or args.steps < 1 or args.processes < 1 \
+            or args.agents < 1:
+        parser.error("--envs, --idle, --steps, --processes and --agents must be positive")
     rows = []
     if not args.json:
         print("envs  mode      procs  RSS MB  per env  idle CPU  up s  answered s  alone steps/s (p99 ms)"
               "  together steps/s", flush=True)
     for n in args.envs:
-        r = bench(n, args.isolate, args.processes, args.idle, args.steps, args.breakdown)
+        r = bench(n, args.isolate, args.processes, args.agents, args.idle, args.steps, args.breakdown)
         rows.append(r)
         if not args.json:
             print(f"{r['envs']:4d}  {r['mode']:8s}  {r['processes']:5d}  {r['rss_mb']:6.0f}  "
