@@ -82,6 +82,28 @@ def _native():
     return native
 
 
+class ObservationDrawer:
+    """Frames of the scene observations describe, through one camera at one size, drawn in this
+    process by the native module (the envs over ROS render with it; see the module doc)."""
+
+    def __init__(self, camera: str, width: int, height: int):
+        _native().check_render(camera, width, height)  # a bad camera or size fails when made
+        self.camera, self.width, self.height = camera, width, height
+        self._renderers: dict[str, Any] = {}
+
+    def draw(self, observation) -> np.ndarray:
+        """The scene of `observation` (a composuite_msgs/Observation or its view) as a
+        `(height, width, 3)` uint8 array; the task is the one its one-hots name."""
+        if observation is None:
+            raise gymnasium.error.ResetNeeded("render() before reset(): there is no observation to draw yet")
+        view = _view(observation)
+        native = _native()
+        task = native.task_of_one_hots([float(v) for v in view.task_one_hots])
+        if task not in self._renderers:
+            self._renderers[task] = native.StateRenderer(task)
+        return self._renderers[task].render(view.flat, self.camera, self.width, self.height)
+
+
 def stamp_ns(message) -> int:
     """An observation's header stamp (the suite's sim time) in integer nanoseconds."""
     return _view(message).stamp_ns
@@ -118,10 +140,8 @@ class CompoSuiteRosEnv(gymnasium.Env):
         self.render_mode = render_mode
         self.render_camera = render_camera
         self.render_size = (render_width, render_height)
-        self._renderer = None
+        self._drawer = ObservationDrawer(render_camera, render_width, render_height) if render_mode else None
         self._last_observation: ObservationView | None = None
-        if render_mode is not None:
-            _native().check_render(render_camera, render_width, render_height)
         self.namespace = normalize_namespace(namespace)
         self.action_mode = action_mode
         self.use_task_id_obs = use_task_id_obs
@@ -179,17 +199,9 @@ class CompoSuiteRosEnv(gymnasium.Env):
     def render(self):
         """The scene of the last observation as a `(height, width, 3)` uint8 array with
         `render_mode="rgb_array"`; None without a render mode (Gymnasium's convention)."""
-        if self.render_mode is None:
+        if self._drawer is None:
             return None
-        view = self._last_observation
-        if view is None:
-            raise gymnasium.error.ResetNeeded("render() before reset(): there is no observation to draw yet")
-        native = _native()
-        task = native.task_of_one_hots([float(v) for v in view.task_one_hots])
-        if self._renderer is None or self._renderer.task != task:
-            self._renderer = native.StateRenderer(task)
-        width, height = self.render_size
-        return self._renderer.render(view.flat, self.render_camera, width, height)
+        return self._drawer.draw(self._last_observation)
 
     def close(self) -> None:
         """Leave the ROS graph: no node, participant or thread of this env remains."""

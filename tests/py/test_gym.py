@@ -211,7 +211,8 @@ def test_vector_env_four_environments_two_tasks(tmp_path):
     tasks = [TASKS[0], TASKS[1]] * 2
     with launch_running(tmp_path, "/vec", TASKS[0], "--envs", "4", "--horizon", "12",
                         service_mapping="fastdds") as launched:
-        envs = CompoSuiteRosVectorEnv(launched.namespaces, tasks)
+        envs = CompoSuiteRosVectorEnv(launched.namespaces, tasks, render_mode="rgb_array", render_width=48,
+                                      render_height=32)
         try:
             observations, infos = envs.reset(seed=20)
             assert observations.shape == (4, 93) and list(infos["seed"]) == [20, 21, 22, 23]
@@ -224,8 +225,16 @@ def test_vector_env_four_environments_two_tasks(tmp_path):
                 trace.append(observations)
                 rewards.append(reward)
                 ends.append(terminated | truncated)
+            frames = envs.render()
         finally:
             envs.close()
+    # One frame per environment: its last observation drawn (what the native module draws from it).
+    from composuite_ros import _native
+
+    assert isinstance(frames, tuple) and len(frames) == 4
+    for i in range(4):
+        assert frames[i].shape == (32, 48, 3)
+        assert np.array_equal(frames[i], _native.StateRenderer(tasks[i]).render(trace[-1][i], "frontview", 48, 32))
     # Each environment equals its own in-process Env: 12 steps, the horizon ends it (step 12),
     # step 13 is the autoreset (new episode's first observation, reward 0), step 14 its step 1.
     for i in range(4):
