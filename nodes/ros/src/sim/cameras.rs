@@ -10,7 +10,7 @@
 //! cameras in `world`, `eye_in_hand` in the hand link it is mounted on.
 
 use composuite_core::env::Env;
-use composuite_core::render::{CAMERAS, Mount, camera_spec};
+use composuite_core::render::{Mount, camera_spec};
 use composuite_msgs::builtin_interfaces::msg::Time;
 use composuite_msgs::geometry_msgs::msg::TransformStamped;
 use composuite_msgs::sensor_msgs::msg::{CameraInfo, Image, RegionOfInterest};
@@ -48,15 +48,6 @@ pub fn check_size(v: &ParameterValue) -> Result<(), String> {
         ParameterValue::Integer(n) if (1..=MAX_SIZE).contains(n) => Ok(()),
         _ => Err(format!("pixels, 1 to {MAX_SIZE}")),
     }
-}
-
-/// The names the `cameras` parameter accepts, for its description.
-pub fn valid_names() -> String {
-    CAMERAS
-        .iter()
-        .map(|c| c.name)
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// `camera/<name>/image_raw`.
@@ -224,6 +215,17 @@ mod test {
         assert!(check_size(&ParameterValue::Integer(0)).is_err());
         assert!(check_size(&ParameterValue::Integer(MAX_SIZE + 1)).is_err());
         assert!(check_size(&ParameterValue::Integer(84)).is_ok());
+    }
+
+    #[test]
+    fn the_parameters_description_names_every_camera() {
+        let spec = crate::sim::PARAMS
+            .iter()
+            .find(|p| p.name == "cameras")
+            .unwrap();
+        for camera in composuite_core::render::CAMERAS {
+            assert!(spec.description.contains(camera.name), "{}", camera.name);
+        }
     }
 
     #[test]
