@@ -171,3 +171,41 @@ def test_a_bad_camera_parameter_stops_the_sim_naming_what_is_valid(value, says):
         [str(node_suite.node_dir() / "sim_node"), "--ros-args", "-p", "camera_width:=0"],
         env=dict(os.environ, ROS_DOMAIN_ID="201"), capture_output=True, text=True, timeout=30)
     assert size.returncode != 0 and "1 to 4096" in size.stderr, size.stderr
+
+
+def test_rclpy_reads_the_camera_topics(tmp_path):
+    """Real rclpy (Jazzy, Fast DDS) subscribes to a camera's image with the sensor-data profile (best
+    effort, what image viewers use) and to its camera_info with the default one, then resets through
+    the service: both arrive stamped as the reset's observation, rgb8 of the configured size."""
+    from composuite_msgs.srv import Reset
+    from rclpy.qos import qos_profile_sensor_data
+    from sensor_msgs.msg import CameraInfo, Image
+
+    from rclpy_agent import RclpyAgent
+
+    params = tmp_path / "cameras.yaml"
+    params.write_text(PARAMS)
+    with node_suite.launch_running(tmp_path, "/camrp", TASK, "--params-file", str(params),
+                                   service_mapping="fastdds") as launched:
+        agent = RclpyAgent(launched.domain)
+        try:
+            images, infos = [], []
+            agent.node.create_subscription(Image, "/camrp/camera/frontview/image_raw", images.append,
+                                           qos_profile_sensor_data)
+            agent.node.create_subscription(CameraInfo, "/camrp/camera/frontview/camera_info", infos.append, 10)
+            reset = agent.node.create_client(Reset, "/camrp/reset")
+            agent.spin_until(lambda: agent.node.count_publishers("/camrp/camera/frontview/image_raw") == 1,
+                             what="the image publisher")
+            time.sleep(0.5)  # our readers matched on the sim's side too
+            reply = agent.call(reset, Reset.Request(seed=2, use_seed=True))
+            stamp = ns_of(reply.observation.header.stamp)
+            image = agent.spin_until(lambda: next((m for m in images if ns_of(m.header.stamp) == stamp), None),
+                                     what="the reset's image")
+            info = agent.spin_until(lambda: next((m for m in infos if ns_of(m.header.stamp) == stamp), None),
+                                    what="the reset's camera_info")
+        finally:
+            agent.close()
+    assert (image.encoding, image.width, image.height, image.step) == ("rgb8", WIDTH, HEIGHT, 3 * WIDTH)
+    assert len(image.data) == WIDTH * HEIGHT * 3
+    assert (info.width, info.height) == (WIDTH, HEIGHT)
+    assert info.k[0] == pytest.approx(focal(CAMERAS["frontview"]), rel=1e-12)
