@@ -315,6 +315,19 @@ fn jazzy_type_hashes_pinned() {
             sensor_msgs::msg::CompressedImage::TYPE_HASH,
             "15640771531571185e2efc8a100baf923961a4d15d5569652e6cb6691e8e371a",
         ),
+        // The sim's camera topics.
+        (
+            sensor_msgs::msg::Image::TYPE_HASH,
+            "d31d41a9a4c4bc8eae9be757b0beed306564f7526c88ea6a4588fb9582527d47",
+        ),
+        (
+            sensor_msgs::msg::CameraInfo::TYPE_HASH,
+            "b3dfd68ff46c9d56c80fd3bd4ed22c7a4ddce8c8348f2f59c299e73118e7e275",
+        ),
+        (
+            sensor_msgs::msg::RegionOfInterest::TYPE_HASH,
+            "ad16bcba5f9131dcdba6fbded19f726f5440e3c513b4fb586dd3027eeed8abb1",
+        ),
         (
             std_msgs::msg::ColorRGBA::TYPE_HASH,
             "77a7a5b9ae477306097665106e0413ba74440245b1f3d0c6d6405fe5c7813fe8",

@@ -22,6 +22,11 @@ Push when the object is lifted more than 10 cm. `info` carries every stage value
 current and furthest stage, `success` (reward 1 at this step), `episode_success` (at any step so
 far), the step and the sim time since the reset (`sim_time`, s); the reset's info the episode
 number, seed, task and the suite's clock (`suite_time`, s).
+
+With `render_mode="rgb_array"`, `render()` draws the last observation the suite sent (the arm's
+joints, the fingers and the object's pose, and the task its one-hots name) with the same
+renderer as the in-process env, here in this process (composuite_ros' native module): a frame
+costs no bandwidth and shows exactly the step the observation is of.
 """
 
 from __future__ import annotations
@@ -67,6 +72,38 @@ class EpisodeTracker(episode.EpisodeTracker):
             reason=status.reason_text, done=bool(status.done or status.terminated or status.truncated))
 
 
+def _native():
+    """composuite_ros' native module, which draws the frames; a clear error if it is missing."""
+    try:
+        from . import _native as native
+    except ImportError as e:
+        raise ImportError("render_mode='rgb_array' draws with composuite_ros' native module, which is "
+                          "not built here (`pip install ./python` builds it with the Rust toolchain)") from e
+    return native
+
+
+class ObservationDrawer:
+    """Frames of the scene observations describe, through one camera at one size, drawn in this
+    process by the native module (the envs over ROS render with it; see the module doc)."""
+
+    def __init__(self, camera: str, width: int, height: int):
+        _native().check_render(camera, width, height)  # a bad camera or size fails when made
+        self.camera, self.width, self.height = camera, width, height
+        self._renderers: dict[str, Any] = {}
+
+    def draw(self, observation) -> np.ndarray:
+        """The scene of `observation` (a composuite_msgs/Observation or its view) as a
+        `(height, width, 3)` uint8 array; the task is the one its one-hots name."""
+        if observation is None:
+            raise gymnasium.error.ResetNeeded("render() before reset(): there is no observation to draw yet")
+        view = _view(observation)
+        native = _native()
+        task = native.task_of_one_hots([float(v) for v in view.task_one_hots])
+        if task not in self._renderers:
+            self._renderers[task] = native.StateRenderer(task)
+        return self._renderers[task].render(view.flat, self.camera, self.width, self.height)
+
+
 def stamp_ns(message) -> int:
     """An observation's header stamp (the suite's sim time) in integer nanoseconds."""
     return _view(message).stamp_ns
@@ -84,17 +121,27 @@ class CompoSuiteRosEnv(gymnasium.Env):
         domain_id: ROS_DOMAIN_ID (default: the environment variable, else 0).
         timeout: seconds any wait may take before it raises, naming what it waited for (the
             first contact with the suite, discovery, may take 3 times as long).
+        render_mode: None, or "rgb_array": `render()` returns the scene of the last observation
+            as a `(height, width, 3)` uint8 array (see the module doc).
+        render_camera: "frontview" (default), "agentview", "birdview", "sideview" or
+            "eye_in_hand".
+        render_width, render_height: the picture's size in pixels (256 × 256).
     """
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, task: str | Task | None = None, namespace: str = "/", *,
                  action_mode: str = "reference", use_task_id_obs: bool = True,
-                 domain_id: int | None = None, timeout: float = 10.0, render_mode=None):
+                 domain_id: int | None = None, timeout: float = 10.0, render_mode: str | None = None,
+                 render_camera: str = "frontview", render_width: int = 256, render_height: int = 256):
         check_action_mode(action_mode)
-        if render_mode is not None:
-            raise ValueError("CompoSuiteRosEnv does not render (use RViz or Foxglove on the suite's "
-                             "topics); render_mode must be None")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode {render_mode!r}: use None or one of {self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self.render_camera = render_camera
+        self.render_size = (render_width, render_height)
+        self._drawer = ObservationDrawer(render_camera, render_width, render_height) if render_mode else None
+        self._last_observation: ObservationView | None = None
         self.namespace = normalize_namespace(namespace)
         self.action_mode = action_mode
         self.use_task_id_obs = use_task_id_obs
@@ -126,6 +173,7 @@ class CompoSuiteRosEnv(gymnasium.Env):
             self.set_task(options["task"])
         reply = self._channel.reset(self._seeds.next(seed))
         self._tracker = EpisodeTracker(stamp_ns(reply.observation))
+        self._last_observation = _view(reply.observation)
         info = {"episode": int(reply.episode), "seed": int(reply.seed), "task": str(self.task or ""),
                 "sim_time": 0.0, "suite_time": stamp_ns(reply.observation) * 1e-9}
         return flat_observation(reply.observation, self.use_task_id_obs), info
@@ -142,10 +190,18 @@ class CompoSuiteRosEnv(gymnasium.Env):
                                           self._channel.step_subscriptions()):
             raise self._channel.step_lost_error()
         messages = self._channel.take_step()
+        self._last_observation = _view(messages.observation)
         info = self._tracker.step_info(messages)
         status = messages.status
         return (flat_observation(messages.observation, self.use_task_id_obs),
                 float(messages.reward.total), bool(status.terminated), bool(status.truncated), info)
+
+    def render(self):
+        """The scene of the last observation as a `(height, width, 3)` uint8 array with
+        `render_mode="rgb_array"`; None without a render mode (Gymnasium's convention)."""
+        if self._drawer is None:
+            return None
+        return self._drawer.draw(self._last_observation)
 
     def close(self) -> None:
         """Leave the ROS graph: no node, participant or thread of this env remains."""

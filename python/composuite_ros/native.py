@@ -201,6 +201,9 @@ class CompoSuiteNativeVectorEnv(VectorEnv):
         use_task_id_obs, horizon, reward_shaping, reward_scale: as `CompoSuiteNativeEnv`.
         copy: return fresh arrays from `reset`/`step` (True, as Gymnasium's own vector envs);
             False returns the batch's own buffers, overwritten by the next call.
+        render_mode, render_camera, render_width, render_height: as `CompoSuiteNativeEnv`;
+            `render()` returns one frame per environment, a tuple of `(height, width, 3)` uint8
+            arrays (Gymnasium's vector convention, what its vector `RecordVideo` tiles).
 
     Actions are the reference benchmark's (8 values in [-1, 1] per environment). Autoreset: when
     environment i ends an episode, the next `step()` ignores its action, resets it (the next
@@ -208,16 +211,23 @@ class CompoSuiteNativeVectorEnv(VectorEnv):
     terminated = truncated = False, with that reset's info.
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, tasks: str | Task | Sequence[str | Task] = DEFAULT_TASK,
                  num_envs: int | None = None, *, threads: int | None = None,
                  use_task_id_obs: bool = True, horizon: int = 500, reward_shaping: bool = True,
-                 reward_scale: float = 1.0, copy: bool = True, **kwargs):
+                 reward_scale: float = 1.0, copy: bool = True, render_mode: str | None = None,
+                 render_camera: str = "frontview", render_width: int = 256, render_height: int = 256,
+                 **kwargs):
         # make_vec passes the spec's max_episode_steps (None unless registered with one).
         kwargs.pop("max_episode_steps", None)
         if kwargs:
             raise TypeError(f"unexpected arguments: {', '.join(sorted(kwargs))}")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode {render_mode!r}: use None or one of {self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self.render_camera = render_camera
+        self.render_size = (render_width, render_height)
         if isinstance(tasks, (str, Task)):
             tasks = [tasks] * (1 if num_envs is None else num_envs)
         tasks = [_task_name(t) for t in tasks]
@@ -245,6 +255,16 @@ class CompoSuiteNativeVectorEnv(VectorEnv):
         self._clock_ns = np.zeros(self.num_envs, dtype=np.int64)
         self._index = np.arange(self.num_envs)
         self._on_new_tasks()
+        if render_mode is not None:
+            self.render()  # a bad camera name or size fails here, not at the first frame
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Every environment's scene now, a tuple of `(height, width, 3)` uint8 arrays in
+        environment order, with `render_mode="rgb_array"`; None without a render mode."""
+        if self.render_mode is None:
+            return None
+        width, height = self.render_size
+        return tuple(self._batch.render(i, self.render_camera, width, height) for i in range(self.num_envs))
 
     @property
     def threads(self) -> int:

@@ -29,7 +29,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ._link import Channel, Participant, attempt_budget
-from .env import (EpisodeSeeds, EpisodeTracker, flat_observation, observation_space,
+from .env import (EpisodeSeeds, EpisodeTracker, ObservationDrawer, flat_observation, observation_space,
                   reference_action_space, stamp_ns)
 from .episode import vector_seeds
 from .errors import EpisodeOverError
@@ -47,14 +47,22 @@ class CompoSuiteRosVectorEnv(VectorEnv):
         domain_id: ROS_DOMAIN_ID (default: the environment variable, else 0).
         timeout: seconds any wait may take before it raises, naming what it waited for (the
             first contact with the suite, discovery, may take 3 times as long).
+        render_mode, render_camera, render_width, render_height: as `CompoSuiteRosEnv`;
+            `render()` returns a tuple with each environment's last observation drawn.
 
     Actions are the reference benchmark's (8 values in [-1, 1] per environment).
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, namespaces: Sequence[str], tasks: str | Task | Sequence[str | Task] | None = None,
-                 *, use_task_id_obs: bool = True, domain_id: int | None = None, timeout: float = 10.0):
+                 *, use_task_id_obs: bool = True, domain_id: int | None = None, timeout: float = 10.0,
+                 render_mode: str | None = None, render_camera: str = "frontview", render_width: int = 256,
+                 render_height: int = 256):
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode {render_mode!r}: use None or one of {self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self._drawer = ObservationDrawer(render_camera, render_width, render_height) if render_mode else None
         if not namespaces:
             raise ValueError("namespaces is empty: give one namespace per environment")
         if len(set(namespaces)) != len(namespaces):
@@ -72,6 +80,7 @@ class CompoSuiteRosVectorEnv(VectorEnv):
         self._seeds = [EpisodeSeeds() for _ in range(self.num_envs)]
         self._trackers: list[EpisodeTracker | None] = [None] * self.num_envs
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._last_observations: list = [None] * self.num_envs
         self._participant = Participant("composuite_gym_vector", domain_id)
         try:
             self.channels = [Channel(self._participant, ns, timeout) for ns in namespaces]
@@ -123,6 +132,7 @@ class CompoSuiteRosVectorEnv(VectorEnv):
                 replies[i] = channel.reset(episode_seeds[i])
         for i in indices:
             self._trackers[i] = EpisodeTracker(stamp_ns(replies[i].observation))
+            self._last_observations[i] = replies[i].observation
         return replies
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -176,6 +186,7 @@ class CompoSuiteRosVectorEnv(VectorEnv):
         infos: dict = {}
         for i in stepping:
             messages = self.channels[i].take_step()
+            self._last_observations[i] = messages.observation
             observations[i] = flat_observation(messages.observation, self.use_task_id_obs)
             rewards[i] = messages.reward.total
             terminations[i] = messages.status.terminated
@@ -186,6 +197,13 @@ class CompoSuiteRosVectorEnv(VectorEnv):
             infos = self._add_info(infos, self._reset_info(i, replies[i]), i)
         self._autoreset = terminations | truncations
         return observations, rewards, terminations, truncations, infos
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Each environment's last observation drawn, a tuple of `(height, width, 3)` uint8 arrays
+        in environment order, with `render_mode="rgb_array"`; None without a render mode."""
+        if self._drawer is None:
+            return None
+        return tuple(self._drawer.draw(o) for o in self._last_observations)
 
     def close_extras(self, **kwargs) -> None:
         """Leave the ROS graph: no node, participant or thread of these envs remains."""

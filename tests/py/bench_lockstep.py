@@ -6,10 +6,16 @@ AND the reward of that step (matched by episode and step, never "the latest"). P
 the suite (`composuite launch --service-mapping cyclone`), reset through the service, run the
 steps (reset every 500 = the horizon), print env steps/s and the step latency median and p99.
 
+With `--camera NAME`, the sim also publishes that camera's images (`--camera-size`, 84 by
+default) and an agent step waits for the step's image as well: the cost of one camera on.
+`--camera-unread` turns the camera on without subscribing to it: the sim renders every step,
+but no reader means nothing is sent — the cost of the drawing alone.
+
 Run inside the loopback-only namespace; `scripts/bench-ros` does that and builds the release
 binaries first. Figures only — nothing is asserted.
 
     python tests/py/bench_lockstep.py --composuite target/release/composuite --steps 2000
+    python tests/py/bench_lockstep.py --composuite target/release/composuite --camera frontview
 """
 
 from __future__ import annotations
@@ -77,16 +83,31 @@ class RssSampler:
         self._thread.join()
 
 
-def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: float = 0.0) -> dict:
+def camera_params(camera: str, size: int) -> list[str]:
+    """`--params-file` arguments that turn on one camera of the sim (none without a camera)."""
+    if not camera:
+        return []
+    path = f"/tmp/bench_lockstep_camera_{os.getpid()}.yaml"
+    with open(path, "w") as f:
+        f.write(f"/**/sim:\n  ros__parameters:\n    cameras: [{camera}]\n"
+                f"    camera_width: {size}\n    camera_height: {size}\n")
+    return ["--params-file", path]
+
+
+def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: float = 0.0,
+               camera: str = "", camera_size: int = 84, camera_read: bool = True) -> dict:
     domain = random.randint(1, 200)
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
     failed = False
     suite = subprocess.Popen(
         [*node_suite.suite_launcher(), composuite, "launch", "--task", task, "--service-mapping", "cyclone",
-         "--horizon", str(horizon), "--namespace", "/bench", "--log-level", os.environ.get("BENCH_LOG_LEVEL", "warn")],
+         "--horizon", str(horizon), "--namespace", "/bench", "--log-level", os.environ.get("BENCH_LOG_LEVEL", "warn"),
+         *camera_params(camera, camera_size)],
         env=env, stderr=subprocess.PIPE, text=True)
     try:
         with ros_agent.Agent(namespace="/bench", domain_id=domain) as agent:
+            images = (agent.subscribe(f"camera/{camera}/image_raw", "sensor_msgs/msg/Image")
+                      if camera and camera_read else None)
             states = agent.subscribe("joint_states", "sensor_msgs/msg/JointState")
             observations = agent.subscribe("observation", "composuite_msgs/msg/Observation")
             rewards = agent.subscribe("reward", "composuite_msgs/msg/StagedReward")
@@ -96,6 +117,8 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: 
             command.wait_for_subscribers(1, timeout=20)
             observations.wait_for_publishers(timeout=20)
             rewards.wait_for_publishers(timeout=20)
+            if images:
+                images.wait_for_publishers(timeout=20)
             _, first = ros_agent.reset_with_joint_states(reset, states, seed=0)
             done = 0
             sampler = RssSampler(suite.pid, rss_every, lambda: done) if rss_every else None
@@ -114,9 +137,14 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: 
                 for k in range(1, min(horizon, steps - done) + 1):
                     targets = [q + rng.uniform(-0.05, 0.05) for q in home]
                     o_start, r_start = len(observations.samples), len(rewards.samples)
+                    i_start = len(images.samples) if images else 0
                     t0 = time.perf_counter()
                     command.publish(name=names, position=targets)
-                    observations.wait_for({"episode": episode, "step": k}, timeout=5, start=o_start)
+                    seen = observations.wait_for({"episode": episode, "step": k}, timeout=5, start=o_start)
+                    if images:
+                        images.wait_for({"header.stamp.sec": seen.header.stamp.sec,
+                                         "header.stamp.nanosec": seen.header.stamp.nanosec},
+                                        timeout=5, start=i_start)
                     if WAIT_FOR_REWARD:
                         rewards.wait_for({"episode": episode, "step": k}, timeout=5, start=r_start)
                     latencies.append(time.perf_counter() - t0)
@@ -125,6 +153,8 @@ def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: 
                 observations.clear()
                 rewards.clear()
                 states.clear()
+                if images:
+                    images.clear()
             wall = time.perf_counter() - t_start
             if sampler:
                 sampler.stop()
@@ -165,11 +195,16 @@ def main() -> None:
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--rss-every", type=float, default=0.0, metavar="SECONDS",
                         help="soak: print the nodes' resident memory every SECONDS (stderr)")
+    parser.add_argument("--camera", default="", help="turn this camera's image topic on and wait for its images")
+    parser.add_argument("--camera-size", type=int, default=84, help="the camera's width and height (pixels)")
+    parser.add_argument("--camera-unread", action="store_true",
+                        help="turn the camera on but do not subscribe to it (the drawing's cost alone)")
     args = parser.parse_args()
     results = []
     for task in args.tasks:
         print(f"bench: {task} ...", file=sys.stderr, flush=True)
-        results.append(bench_task(args.composuite, task, args.steps, args.horizon, args.rss_every))
+        results.append(bench_task(args.composuite, task, args.steps, args.horizon, args.rss_every,
+                                  args.camera, args.camera_size, not args.camera_unread))
     if args.json:
         print(json.dumps(results, indent=1))
         return

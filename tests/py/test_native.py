@@ -341,3 +341,94 @@ def test_renders_rgb_arrays_of_the_scene_as_gymnasium_expects():
         CompoSuiteNativeEnv(TASKS[0], render_mode="human")
     with pytest.raises(ValueError):
         CompoSuiteNativeEnv(TASKS[0], render_mode="rgb_array", render_width=0)
+
+
+def test_the_vector_env_renders_one_frame_per_environment():
+    """render_mode="rgb_array" on the vector env: render() gives a tuple with one (h, w, 3) frame per
+    environment (Gymnasium's vector convention), each the frame the single env gives for the same
+    task, seed and actions, bit for bit; a bad camera is refused when made."""
+    tasks = [TASKS[0], TASKS[1], TASKS[0]]
+    envs = gymnasium.make_vec("composuite_ros/CompoSuiteNative-v0", num_envs=3, tasks=tasks, horizon=HORIZON,
+                              render_mode="rgb_array", render_camera="agentview", render_width=80, render_height=60)
+    assert envs.render_mode == "rgb_array" and envs.metadata["render_fps"] == 20
+    envs.reset(seed=[5, 6, 7])
+    actions = np.random.default_rng(1).uniform(-1, 1, size=(4, 3, 8))
+    for a in actions:
+        envs.step(a)
+    frames = envs.render()
+    assert isinstance(frames, tuple) and len(frames) == 3
+    assert all(f.shape == (60, 80, 3) and f.dtype == np.uint8 for f in frames)
+    for i, task in enumerate(tasks):
+        single = CompoSuiteNativeEnv(task, horizon=HORIZON, render_mode="rgb_array", render_camera="agentview",
+                                     render_width=80, render_height=60)
+        single.reset(seed=5 + i)
+        for a in actions:
+            single.step(a[i])
+        assert np.array_equal(single.render(), frames[i]), task
+    assert not np.array_equal(frames[0], frames[2]), "other seeds and actions, another scene"
+    envs.close()
+    assert CompoSuiteNativeVectorEnv(TASKS[0], num_envs=2).render() is None
+    with pytest.raises(ValueError, match="frontview.*eye_in_hand"):
+        CompoSuiteNativeVectorEnv(TASKS[0], num_envs=2, render_mode="rgb_array", render_camera="top")
+
+
+def test_a_frame_drawn_from_the_observation_alone_matches_the_envs_frame():
+    """_native.StateRenderer (what CompoSuiteRosEnv renders with) draws the scene from a flat
+    observation; it shows what the env's own render shows, up to a few edge pixels."""
+    from composuite_ros import _native
+
+    for with_task in (True, False):
+        env = CompoSuiteNativeEnv(TASKS[2], horizon=HORIZON, use_task_id_obs=with_task, render_mode="rgb_array",
+                                  render_width=96, render_height=96)
+        observation, _ = env.reset(seed=4)
+        for _ in range(8):
+            observation, *_ = env.step(np.array([0.5, -0.5, 0.3, 0.8, -0.2, 0.4, 0.1, 1.0]))
+        drawn = _native.StateRenderer(TASKS[2]).render(observation, "frontview", 96, 96)
+        differ = np.any(np.abs(drawn.astype(int) - env.render().astype(int)) > 2, axis=2).mean()
+        assert differ < 0.01, differ
+    assert _native.task_of_one_hots(list(observation_one_hots(TASKS[2]))) == TASKS[2]
+    with pytest.raises(ValueError, match="93.*77"):
+        _native.StateRenderer(TASKS[2]).render(np.zeros(10), "frontview", 8, 8)
+    with pytest.raises(ValueError, match="one-hots"):
+        _native.task_of_one_hots([0.0] * 16)
+
+
+def observation_one_hots(task: str) -> np.ndarray:
+    env = CompoSuiteNativeEnv(task, horizon=HORIZON)
+    observation, _ = env.reset(seed=0)
+    return observation[45:61]
+
+
+def test_gymnasiums_record_video_writes_the_episodes(tmp_path):
+    """Gymnasium's RecordVideo (single env) and its vector RecordVideo (the environments' frames
+    tiled) write MP4s through moviepy; imageio reads them back: one frame per observation."""
+    import imageio.v3 as iio
+    from gymnasium.wrappers import RecordVideo
+    from gymnasium.wrappers.vector import RecordVideo as VectorRecordVideo
+
+    env = RecordVideo(gymnasium.make("composuite_ros/CompoSuiteNative-v0", task=TASKS[1], horizon=12,
+                                     render_mode="rgb_array", render_width=64, render_height=48),
+                      str(tmp_path / "one"), episode_trigger=lambda e: True, disable_logger=True)
+    env.reset(seed=2)
+    done = False
+    while not done:
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        done = terminated or truncated
+    env.close()
+    (video,) = (tmp_path / "one").glob("*.mp4")
+    frames = np.stack(list(iio.imiter(video, plugin="FFMPEG")))
+    assert frames.shape == (13, 48, 64, 3), "the reset and 12 steps"
+    assert not np.array_equal(frames[0], frames[-1])
+
+    envs = VectorRecordVideo(
+        gymnasium.make_vec("composuite_ros/CompoSuiteNative-v0", num_envs=2, horizon=8, render_mode="rgb_array",
+                           render_width=32, render_height=32),
+        str(tmp_path / "vec"), episode_trigger=lambda e: e == 0, disable_logger=True)
+    envs.reset(seed=0)
+    for _ in range(6):
+        envs.step(envs.action_space.sample())
+    envs.close()
+    (video,) = (tmp_path / "vec").glob("*.mp4")
+    frames = np.stack(list(iio.imiter(video, plugin="FFMPEG")))
+    assert frames.shape[1:] == (32, 64, 3), "two environments side by side"
+    assert frames.shape[0] == 7, "the reset and 6 steps"

@@ -1,8 +1,9 @@
 //! `composuite bag`: tools that read a recorded session from the bag alone — `info` (what
 //! `ros2 bag info` prints, plus the episodes found), `episodes` (the per-episode table
 //! recomputed from the recorded topics) and `reindex` (rebuild `metadata.yaml`, and the summary
-//! of a file whose recorder was killed, as `ros2 bag reindex` and `mcap recover` do); `play`
-//! publishes it into a running graph again, as `ros2 bag play` does.
+//! of a file whose recorder was killed, as `ros2 bag reindex` and `mcap recover` do), `render`
+//! (a video of its episodes, [`crate::bag_render`]); `play` publishes it into a running graph
+//! again, as `ros2 bag play` does.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -12,14 +13,15 @@ use composuite_msgs::{cdr, msg};
 use composuite_ros::bag::reader::{for_each_message, read_metadata, reindex};
 use serde_json::json;
 
-/// Read a recorded session from its bag alone: info, episodes, replay, export, reindex; or
-/// play it back into a running ROS graph.
+/// Read a recorded session from its bag alone: info, episodes, replay, export, render, reindex;
+/// or play it back into a running ROS graph.
 ///
 /// Examples:
 ///   composuite bag info runs/s1/bag
 ///   composuite bag episodes runs/s1/bag --csv episodes.csv
 ///   composuite bag replay runs/s1/bag --verify
 ///   composuite bag export runs/s1/bag --topics /ns/reward --format csv --out exported
+///   composuite bag render runs/s1/bag --camera frontview --out ep.gif
 ///   composuite bag reindex runs/s1/bag
 ///   composuite bag play runs/s1/bag --rate 2 --clock 100
 #[derive(Args, Debug)]
@@ -103,6 +105,39 @@ enum BagCommand {
         #[arg(long, default_value_t = 1.0)]
         delay: f64,
     },
+    /// A video of the recorded episodes (GIF, or MP4 through ffmpeg; the extension decides),
+    /// one frame per recorded observation — the episode's start, then every step — drawn from
+    /// the recorded states alone: the arm's joints, the fingers and the object's pose of each
+    /// `observation`, the task of each `scene`.
+    Render {
+        /// The bag directory.
+        bag: PathBuf,
+        /// Camera: frontview, agentview, birdview, sideview or eye_in_hand.
+        #[arg(long, default_value = "frontview")]
+        camera: String,
+        /// The video file to write (.gif or .mp4; must not exist).
+        #[arg(long)]
+        out: PathBuf,
+        /// Frame width (pixels).
+        #[arg(long, default_value_t = 256)]
+        width: u32,
+        /// Frame height (pixels).
+        #[arg(long, default_value_t = 256)]
+        height: u32,
+        /// Only these episodes (numbers as `composuite bag episodes` lists them); default: all,
+        /// one after the other.
+        #[arg(long = "episode", num_args = 1..)]
+        episodes: Vec<u32>,
+        /// The environment (namespace) to render, when the bag holds several.
+        #[arg(long)]
+        namespace: Option<String>,
+        /// Frames per second [default: the recorded control rate, i.e. sim time].
+        #[arg(long)]
+        fps: Option<f64>,
+        /// The ffmpeg that writes .mp4 [default: $COMPOSUITE_FFMPEG, else `ffmpeg` on PATH].
+        #[arg(long, value_name = "PATH")]
+        ffmpeg: Option<PathBuf>,
+    },
     /// Rebuild metadata.yaml from the MCAP files (a bag whose recorder was killed has none);
     /// a file without its summary is first rewritten from its complete chunks.
     Reindex {
@@ -147,6 +182,28 @@ pub fn run(args: &BagArgs) -> Result<(), String> {
             remap,
             delay,
         } => crate::play::run(bag, *rate, topics, *clock, remap, *delay),
+        BagCommand::Render {
+            bag,
+            camera,
+            out,
+            width,
+            height,
+            episodes,
+            namespace,
+            fps,
+            ffmpeg,
+        } => {
+            let options = crate::bag_render::RenderOptions {
+                camera: camera.clone(),
+                width: *width,
+                height: *height,
+                namespace: namespace.clone(),
+                episodes: episodes.clone(),
+                fps: *fps,
+                ffmpeg: ffmpeg.clone(),
+            };
+            crate::bag_render::run(bag, &options, out)
+        }
         BagCommand::Reindex { bag } => {
             let report = reindex(bag).map_err(|e| e.0)?;
             for (file, why) in &report.recovered {

@@ -6,6 +6,7 @@
 //! an example: docs/src/getting-started.md.
 
 mod bag;
+mod bag_render;
 mod bench;
 mod demo;
 mod drive;
@@ -17,6 +18,7 @@ mod plots;
 mod replay;
 mod session;
 mod tasks;
+mod video;
 
 use clap::{Parser, Subcommand};
 

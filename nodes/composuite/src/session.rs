@@ -2,7 +2,8 @@
 //! and the recorder, drives tasks × episodes with a built-in policy through the ROS interfaces
 //! (see `drive`), and leaves in `--out`: the rosbag2 bag of everything on the wire (`bag/`),
 //! the per-episode table as CSV and JSON, PNG plots (staged reward per episode, success per
-//! task), and a printed summary.
+//! task), and a printed summary; with `--video`, a video of each episode rendered from the bag
+//! (`videos/`, see [`crate::bag_render`]).
 
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
@@ -24,10 +25,12 @@ use crate::launch::{LaunchArgs, Suite};
 /// MCAP: every topic, the agent's commands included), `episodes.csv` and `episodes.json` (task,
 /// seed, length, return, success, furthest stage per episode), `rewards.png` (each episode's
 /// staged reward over time) and `success.png` (success per task), and prints a summary. Every
-/// observation is checked against the in-process environment given the same commands.
+/// observation is checked against the in-process environment given the same commands. With
+/// --video, `videos/episode_<n>.gif` (or .mp4) per episode, drawn from the bag alone.
 ///
 /// Examples:
 ///   composuite session
+///   composuite session --episodes 2 --video --video-camera agentview
 ///   composuite session --tasks IIWA/box/no_obstacle/pick_place Jaco/plate/goal_wall/push
 ///       --episodes 5 --policy random --out runs/random
 #[derive(Args, Debug)]
@@ -67,6 +70,19 @@ pub struct SessionArgs {
     /// Start a new bag file every this many seconds, as `ros2 bag record --max-bag-duration`.
     #[arg(long, value_name = "SECONDS", conflicts_with = "no_record")]
     max_bag_duration: Option<f64>,
+    /// Also write one video per episode into `videos/` beside the table, rendered from the bag
+    /// (as `composuite bag render` does).
+    #[arg(long, conflicts_with = "no_record")]
+    video: bool,
+    /// With --video: the camera (frontview, agentview, birdview, sideview, eye_in_hand).
+    #[arg(long, default_value = "frontview", requires = "video")]
+    video_camera: String,
+    /// With --video: gif (needs nothing) or mp4 (needs ffmpeg).
+    #[arg(long, default_value = "gif", requires = "video")]
+    video_format: String,
+    /// With --video: frame width and height (pixels).
+    #[arg(long, default_value_t = 256, requires = "video")]
+    video_size: u32,
 }
 
 /// Run the session.
@@ -82,6 +98,22 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     let policy = PolicyKind::parse(&args.policy).map_err(|e| format!("--policy: {e}"))?;
     if args.episodes == 0 {
         return Err("--episodes must be at least 1".into());
+    }
+    let video_format = crate::video::VideoFormat::parse(&args.video_format)
+        .map_err(|e| format!("--video-format: {e}"))?;
+    if args.video {
+        composuite_core::render::camera_spec(&args.video_camera)
+            .map_err(|e| format!("--video-camera: {e}"))?;
+        if !(1..=composuite_core::render::MAX_SIDE).contains(&args.video_size) {
+            return Err(format!(
+                "--video-size {}: pixels, 1 to {}",
+                args.video_size,
+                composuite_core::render::MAX_SIDE
+            ));
+        }
+        if video_format == crate::video::VideoFormat::Mp4 {
+            crate::video::find_ffmpeg(None).map_err(|e| format!("--video-format mp4: {e}"))?;
+        }
     }
     if args.max_bag_size == Some(0) {
         return Err("--max-bag-size 0 is invalid; bytes > 0 (leave it out for one file)".into());
@@ -170,6 +202,22 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
         &serde_json::to_string_pretty(&json).unwrap_or_default(),
     )?;
     draw_plots(&out, &outcomes)?;
+    let videos = if args.video {
+        let options = crate::bag_render::RenderOptions {
+            camera: args.video_camera.clone(),
+            width: args.video_size,
+            height: args.video_size,
+            namespace: Some(namespace.clone()),
+            episodes: outcomes.iter().map(|o| o.episode).collect(),
+            fps: None,
+            ffmpeg: None,
+        };
+        let dir = out.join("videos");
+        let written = crate::bag_render::video_per_episode(&bag, &options, video_format, &dir)?;
+        format!(", videos/ ({} {})", written.len(), video_format.extension())
+    } else {
+        String::new()
+    };
     if args.json {
         println!(
             "{}",
@@ -183,7 +231,7 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
             format!("bag/ (composuite bag info {}), ", bag.display())
         };
         println!(
-            "wrote {}: {bag_note}episodes.csv, episodes.json, rewards.png, success.png",
+            "wrote {}: {bag_note}episodes.csv, episodes.json, rewards.png, success.png{videos}",
             out.display(),
         );
     }

@@ -62,6 +62,28 @@ impl TaskFactor {
             objective_id: one_hot(task.objective.names().one_hot_index),
         }
     }
+
+    /// The task these one-hots name ([`TaskFactor::of`] turned around); `None` unless each of
+    /// the four is exactly one 1 among 0s.
+    pub fn task(&self) -> Option<TaskSpec> {
+        fn element<E: crate::axes::AxisElement>(one_hot: &[f64; 4]) -> Option<E> {
+            let ones: Vec<usize> = (0..4).filter(|&i| one_hot[i] == 1.0).collect();
+            let zeros = one_hot.iter().filter(|&&v| v == 0.0).count();
+            match ones[..] {
+                [index] if zeros == 3 => E::TABLE
+                    .iter()
+                    .find(|row| row.one_hot_index == index)
+                    .map(|row| row.element),
+                _ => None,
+            }
+        }
+        Some(TaskSpec::new(
+            element(&self.robot_id)?,
+            element(&self.object_id)?,
+            element(&self.obstacle_id)?,
+            element(&self.objective_id)?,
+        ))
+    }
 }
 
 /// The robot factor (32 values).
@@ -222,6 +244,18 @@ impl Observation {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_task_one_hots_name_their_task_back() {
+        for task in crate::all_tasks() {
+            assert_eq!(TaskFactor::of(&task).task(), Some(task));
+        }
+        let mut bad = TaskFactor::of(&crate::all_tasks()[7]);
+        bad.robot_id = [0.0; 4];
+        assert_eq!(bad.task(), None);
+        bad.robot_id = [1.0, 1.0, 0.0, 0.0];
+        assert_eq!(bad.task(), None);
+    }
 
     /// A hand pointing down, tilted a little either way, sees an upright object rotated by
     /// about half a turn: w is tiny and its sign follows the tilt. The reference's value always

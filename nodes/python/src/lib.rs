@@ -4,7 +4,10 @@
 //! numpy arrays it owns. Python writes the commands into `modes`, `seeds` and `actions`, calls
 //! `run()` (one call, the GIL released while the environments step on the batch's threads),
 //! and reads the rows back. The Gymnasium envs of `composuite_ros.native` are built on it; this
-//! crate converts and releases the GIL, and decides nothing about environments.
+//! crate converts and releases the GIL, and decides nothing about environments. `StateRenderer`
+//! (`render.rs`) draws a scene from an observation alone, for the env over ROS.
+
+mod render;
 
 use composuite_core::TaskSpec;
 use composuite_core::axes::AxisElement;
@@ -484,6 +487,12 @@ mod _native {
     use super::Batch;
     #[pymodule_export]
     use super::end_reasons;
+    #[pymodule_export]
+    use super::render::StateRenderer;
+    #[pymodule_export]
+    use super::render::check_render;
+    #[pymodule_export]
+    use super::render::task_of_one_hots;
     #[pymodule_export]
     use super::sample_tasks;
 

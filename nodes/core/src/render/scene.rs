@@ -126,6 +126,22 @@ impl SceneRenderer {
 
     /// The scene in `world` as `camera` sees it.
     pub fn render(&mut self, world: &SimWorld, camera: &Camera, width: u32, height: u32) -> Frame {
+        let arm_body =
+            |body: usize| from_pose(world.physics.bodies[world.arm.bodies[body]].position());
+        self.render_posed(arm_body, world.object_pose(), camera, width, height)
+    }
+
+    /// The scene with the arm's bodies at `arm_body(i)` (world poses, in the model's body
+    /// order) and the object at `object_pose`, as `camera` sees it: what [`render`](Self::render)
+    /// draws from the physics, and [`StateRenderer`](super::StateRenderer) from joint positions.
+    pub(crate) fn render_posed(
+        &mut self,
+        arm_body: impl Fn(usize) -> Isometry3<f64>,
+        object_pose: Option<Isometry3<f64>>,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Frame {
         let mut frame = Frame::new(width, height);
         // The depth buffer holds 1/z while drawing; 0 is "nothing yet".
         frame.depth.fill(0.0);
@@ -135,13 +151,10 @@ impl SceneRenderer {
             focal: camera.focal_px(height) as f32,
             centre: (width as f32 / 2.0, height as f32 / 2.0),
         };
-        let object_pose = world.object_pose();
         for solid in &self.solids {
             let carrier_pose = match solid.carrier {
                 Carrier::World => Isometry3::identity(),
-                Carrier::ArmBody(body) => {
-                    from_pose(world.physics.bodies[world.arm.bodies[body]].position())
-                }
+                Carrier::ArmBody(body) => arm_body(body),
                 Carrier::Object => match object_pose {
                     Some(pose) => pose,
                     None => continue,
@@ -165,12 +178,22 @@ impl SceneRenderer {
 
 /// The camera called `name` where it is in `world` now.
 pub fn posed_camera(world: &SimWorld, name: &str) -> Result<Camera, RenderError> {
+    posed_camera_with(name, |link| {
+        world
+            .link_world_pose(link)
+            .unwrap_or_else(|| panic!("every arm model has the link `{link}`"))
+    })
+}
+
+/// The camera called `name`, its mount link (if any) at `link_pose(link)` in the world.
+pub(crate) fn posed_camera_with(
+    name: &str,
+    link_pose: impl Fn(&str) -> Isometry3<f64>,
+) -> Result<Camera, RenderError> {
     let spec = camera_spec(name)?;
     let mount = match spec.mount {
         Mount::World => Isometry3::identity(),
-        Mount::Link(link) => world
-            .link_world_pose(link)
-            .unwrap_or_else(|| panic!("every arm model has the link `{link}`")),
+        Mount::Link(link) => link_pose(link),
     };
     Ok(Camera {
         pose: mount * spec.optical_in_mount(),

@@ -26,12 +26,14 @@
 //!   `observation`, `joint_states`, `tf` (every URDF link, and the eef, object and goal frames),
 //!   `object_markers`, `clock`, all stamped with the new sim time; when the task changes, the
 //!   latched `robot_description`, `tf_static` (world → the arm's root link) and `scene_markers`
-//!   (the arena) — see [`view`].
+//!   (the arena) — see [`view`]; and, for the cameras the `cameras` parameter enables (none by
+//!   default), `camera/<name>/image_raw` and `camera/<name>/camera_info` — see [`cameras`].
 //!
 //! Sim time never goes backwards: it advances one control period per step, and one per reset,
 //! so every stamp is unique within a run.
 
 pub mod action_server;
+pub mod cameras;
 pub mod controllers;
 pub mod hardware;
 pub mod ros_control;
@@ -128,6 +130,26 @@ pub const PARAMS: &[ParamSpec] = &[
                       joint_trajectory_controller, forward_position_controller, \
                       gripper_action_controller",
         check: check_controllers,
+    },
+    ParamSpec {
+        name: "cameras",
+        default: || ParameterValue::StringArray(Vec::new()),
+        description: "cameras whose images to publish on camera/<name>/image_raw and \
+                      camera_info after every step (read at start-up): frontview, agentview, \
+                      birdview, sideview, eye_in_hand",
+        check: cameras::check_cameras,
+    },
+    ParamSpec {
+        name: "camera_width",
+        default: || ParameterValue::Integer(cameras::DEFAULT_SIZE),
+        description: "width of the published images (pixels, read at start-up)",
+        check: cameras::check_size,
+    },
+    ParamSpec {
+        name: "camera_height",
+        default: || ParameterValue::Integer(cameras::DEFAULT_SIZE),
+        description: "height of the published images (pixels, read at start-up)",
+        check: cameras::check_size,
     },
     ParamSpec {
         name: "fault_panic",
@@ -274,6 +296,8 @@ struct Sim {
     /// `simulate_steps` goals, and the one being executed.
     steps_goals: Goals<composuite_msgs::simulation_interfaces::action::SimulateStepsResult>,
     steps_running: Option<simulation_services::StepsGoal>,
+    /// The cameras whose images it publishes.
+    cameras: cameras::Cameras,
 }
 
 /// A subscription's stream, or a stream that never yields when the topic is not offered.
@@ -389,6 +413,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         .server::<ListHardwareInterfaces>(names::LIST_HARDWARE_INTERFACES)
         .map_err(e)?;
     let si_servers = simulation_services::Servers::new(node).map_err(e)?;
+    let cameras = cameras::Cameras::new(node).map_err(e)?;
     let mut sim = Sim {
         mode: Mode::parse(&node.param_string("mode")).unwrap_or(Mode::Lockstep),
         realtime_factor: node.param_f64("realtime_factor"),
@@ -403,10 +428,11 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         parameters: Arc::clone(&node.parameters),
         steps_goals: Goals::default(),
         steps_running: None,
+        cameras,
     };
     let log = node.log.clone();
     log.info(format!(
-        "{} up in {:?} mode with controllers [{}]; waiting for a scene on `{}`",
+        "{} up in {:?} mode with controllers [{}] and cameras [{}]; waiting for a scene on `{}`",
         node.fully_qualified_name(),
         sim.mode,
         sim.up
@@ -414,6 +440,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
             .map(|c| c.name())
             .collect::<Vec<_>>()
             .join(", "),
+        sim.cameras.names().join(", "),
         names::SCENE
     ));
     let param_changes = node.param_changes.clone();
@@ -644,9 +671,10 @@ impl Sim {
                 self.task_observation = *b;
                 log.info("task_observation takes effect with the next scene");
             }
-            ("controllers", _) => {
-                log.warn("controllers takes effect when the sim starts again; unchanged now")
-            }
+            ("controllers" | "cameras" | "camera_width" | "camera_height", _) => log.warn(format!(
+                "{} takes effect when the sim starts again; unchanged now",
+                change.name
+            )),
             ("fault_panic", ParameterValue::Boolean(true)) => {
                 log.error("fault_panic was set: panicking now, as asked");
                 panic!("fault_panic was set (fault injection)");
@@ -720,13 +748,10 @@ impl Sim {
             // links differ between the four arms, so their static transforms never clash.
             let root = &robot_model(task.robot).bodies[0].name;
             let base = convert::pose(&composuite_core::arena::robot_base_pose());
-            let _ = self.pubs.tf_static.publish(TFMessage {
-                transforms: vec![convert::world_transform(
-                    root,
-                    &base,
-                    convert::time_from_nanos(self.sim_time_ns),
-                )],
-            });
+            let stamp = convert::time_from_nanos(self.sim_time_ns);
+            let mut transforms = vec![convert::world_transform(root, &base, stamp.clone())];
+            transforms.extend(self.cameras.static_transforms(&stamp));
+            let _ = self.pubs.tf_static.publish(TFMessage { transforms });
         }
         log.info(format!(
             "episode {} of {task}, seed {}",
@@ -1319,6 +1344,9 @@ impl Sim {
             step,
         ));
         self.publish_robot_state(&world_msg);
+        if let Some(run) = &mut self.run {
+            self.cameras.publish(&mut run.env, &stamp);
+        }
     }
 
     /// `joint_states`, `tf`, `object_markers` and `clock` (also while a realtime episode is over,
