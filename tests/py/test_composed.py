@@ -116,6 +116,16 @@ def assert_same(trace, expected, where: str) -> None:
         assert float_bits([reward]) == float_bits([want_reward]), f"{where}: reward of step {step}"
 
 
+def wait_until_back(suite, namespace: str, timeout: float = 20.0) -> None:
+    """Until the environment in `namespace` was started again (its sim said it is up a second
+    time), with the launcher still running."""
+    deadline = time.monotonic() + timeout
+    while suite.text().count(f"{namespace}/sim up") < 2:
+        assert time.monotonic() < deadline, f"{namespace} did not come back:\n{suite.text()[-3000:]}"
+        time.sleep(0.1)
+    assert suite.process.poll() is None, "the launcher goes on"
+
+
 def test_a_failing_node_restarts_its_environment_alone(suite):
     expected = episode(CompoSuiteNativeEnv(TASK), 3, 20)
     with CompoSuiteRosEnv(TASK, NAMESPACES[0]) as env_00:
@@ -132,11 +142,7 @@ def test_a_failing_node_restarts_its_environment_alone(suite):
             " (restart 1 of 2); the other environments go on" in suite.text()
         # While env_01 is down and coming back, env_00 steps on, still bit for bit.
         assert_same(episode(env_00, 3, 20), expected, "env_00 during the restart")
-    deadline = time.monotonic() + 20
-    while suite.text().count(f"{NAMESPACES[1]}/sim up") < 2:
-        assert time.monotonic() < deadline, f"env_01 did not come back:\n{suite.text()[-3000:]}"
-        time.sleep(0.1)
-    assert suite.process.poll() is None, "the launcher goes on"
+    wait_until_back(suite, NAMESPACES[1])
     # The restarted environment serves episodes again, the same as before.
     with CompoSuiteRosEnv(TASK, NAMESPACES[1], timeout=20.0) as env_01:
         assert_same(episode(env_01, 3, 20), expected, "env_01 after its restart")
@@ -193,11 +199,7 @@ def test_environments_split_over_processes_step_alike_and_a_killed_share_restart
         # The other share steps on meanwhile, bit for bit.
         with CompoSuiteRosEnv(TASK, SPLIT_NAMESPACES[3]) as env_03:
             assert_same(episode(env_03, 3, 10), expected, "env_03 while 0..2 restarts")
-        deadline = time.monotonic() + 20
-        while suite.text().count(f"{SPLIT_NAMESPACES[0]}/sim up") < 2:
-            assert time.monotonic() < deadline, f"env_00 did not come back:\n{suite.text()[-3000:]}"
-            time.sleep(0.1)
-        assert suite.process.poll() is None, "the launcher goes on"
+        wait_until_back(suite, SPLIT_NAMESPACES[0])
         with CompoSuiteRosEnv(TASK, SPLIT_NAMESPACES[0], timeout=20.0) as env_00:
             assert_same(episode(env_00, 3, 10), expected, "env_00 after its process restarted")
     assert share_processes(suite.process.pid) == {}, "share processes left running"
