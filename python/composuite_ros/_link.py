@@ -97,33 +97,36 @@ class Participant:
             self.executor.spin_once(timeout_sec=min(remaining, 0.05))
         return True
 
-    def take_for(self, done: Callable[[], object], seconds: float, subscriptions) -> bool:
-        """`spin_for` for the lockstep hot path: wait on `subscriptions` only, take every message
-        they hold and hand it to the subscription's own callback, until `done()` or `seconds`
-        passed. The executor's general machinery (a wait set of every entity, one task object
-        per callback) cost about as much CPU per step as the rest of the agent together; nothing
-        else of the node is served meanwhile (service replies wait for the next `spin_for`)."""
+    def take_for(self, awaited: Callable[[], list], seconds: float, subscriptions) -> bool:
+        """`spin_for` for the lockstep hot path: wait on the subscriptions `awaited()` names (those
+        whose message of the step has not arrived yet; all of them among `subscriptions`), take
+        every message they hold and hand it to the subscription's own callback, until `awaited()`
+        is empty (True) or `seconds` passed (False). The executor's general machinery (a wait set
+        of every entity, one task object per callback) cost about as much CPU per step as the
+        rest of the agent together; nothing else of the node is served meanwhile (service replies
+        wait for the next `spin_for`). Each wait holds only what is still awaited: a vector env of
+        64 environments rebuilt a wait set of all 192 subscriptions for every message."""
         deadline = time.monotonic() + seconds
+        by_pointer = {sub.handle.pointer: sub for sub in subscriptions}
         with contextlib.ExitStack() as handles:
             for sub in subscriptions:
                 handles.enter_context(sub.handle)
             wait_set = _rclpy.WaitSet(len(subscriptions), 0, 0, 0, 0, 0, self.context.handle)
-            while not done():
+            while pending := awaited():
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
                     return False
                 wait_set.clear_entities()
-                for sub in subscriptions:
+                for sub in pending:
                     wait_set.add_subscription(sub.handle)
                 wait_set.wait(int(min(remaining, 0.05) * 1e9))
                 # One message per ready subscription and wait: readiness is "has unread data",
                 # so a reader holding more is ready again at once.
-                pointers = wait_set.get_ready_entities("subscription")
-                for sub in subscriptions:
-                    if sub.handle.pointer in pointers:
-                        taken = sub.handle.take_message(sub.msg_type, sub.raw)
-                        if taken is not None:
-                            sub.callback(taken[0])
+                for pointer in wait_set.get_ready_entities("subscription"):
+                    sub = by_pointer[pointer]
+                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
+                    if taken is not None:
+                        sub.callback(taken[0])
         return True
 
     def close(self) -> None:
@@ -431,6 +434,13 @@ class Channel:
     def step_arrived(self) -> bool:
         key = self.next_key()
         return key in self.observations and key in self.rewards and key in self.statuses
+
+    def step_awaited(self) -> list:
+        """The step subscriptions whose message of the next step has not arrived yet."""
+        key = self.next_key()
+        return [self.subscriptions[name] for name, store in (
+            ("observation", self.observations), ("reward", self.rewards), ("episode", self.statuses))
+            if key not in store]
 
     def take_step(self) -> StepMessages:
         key = self.next_key()

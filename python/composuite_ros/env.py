@@ -186,7 +186,7 @@ class CompoSuiteRosEnv(gymnasium.Env):
                 f"episode {self._channel.episode} in {self.namespace} is over "
                 f"(after {self._channel.step_count} steps); call reset() to start the next one")
         self._send(action)
-        if not self._participant.take_for(self._channel.step_arrived, self._channel.timeout,
+        if not self._participant.take_for(self._channel.step_awaited, self._channel.timeout,
                                           self._channel.step_subscriptions()):
             raise self._channel.step_lost_error()
         messages = self._channel.take_step()

@@ -173,8 +173,23 @@ class CompoSuiteRosVectorEnv(VectorEnv):
                                        "episode: call reset() first")
             self.channels[i].send_reference_action(actions[i])
         replies = self._reset_many(resetting, [None] * len(resetting)) if resetting else {}
+        waiting = [self.channels[i] for i in stepping]
+
+        def awaited() -> list:
+            # Channels whose step is complete leave for good; the others name what they lack.
+            nonlocal waiting
+            subs = []
+            still = []
+            for channel in waiting:
+                lacking = channel.step_awaited()
+                if lacking:
+                    still.append(channel)
+                    subs.extend(lacking)
+            waiting = still
+            return subs
+
         arrived = self._participant.take_for(
-            lambda: all(self.channels[i].step_arrived() for i in stepping), self.timeout,
+            awaited, self.timeout,
             [sub for i in stepping for sub in self.channels[i].step_subscriptions()])
         if not arrived:
             raise next(self.channels[i] for i in stepping
