@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
-use composuite_msgs::{cdr, msg};
+use composuite_msgs::msg;
 use composuite_ros::bag::reader::{for_each_message, read_metadata, reindex};
 use serde_json::json;
 
@@ -361,8 +361,7 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
     let truncated = for_each_message(bag, |m| {
         match m.type_name {
             "composuite_msgs/msg/EpisodeStatus" => {
-                let s: msg::EpisodeStatus =
-                    cdr::decode(m.data).map_err(|e| format!("{}: {e}", m.topic))?;
+                let s: msg::EpisodeStatus = m.decode()?;
                 let ns = namespace_of(m.topic);
                 let key = (ns.clone(), s.episode, s.seed);
                 let i = *index.entry(key).or_insert_with(|| {
@@ -395,8 +394,7 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
                 }
             }
             "composuite_msgs/msg/StagedReward" => {
-                let r: msg::StagedReward =
-                    cdr::decode(m.data).map_err(|e| format!("{}: {e}", m.topic))?;
+                let r: msg::StagedReward = m.decode()?;
                 if r.step == 0 {
                     return Ok(()); // the reset state: where the episode starts, not a step of it
                 }

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use composuite_core::TaskSpec;
 use composuite_core::render::{SceneState, StateRenderer, camera_spec};
-use composuite_msgs::{cdr, msg};
+use composuite_msgs::msg;
 use composuite_ros::bag::reader::for_each_message;
 use composuite_ros::shared::convert;
 
@@ -63,8 +63,7 @@ pub fn recorded_episodes(bag: &Path) -> Result<Vec<RecordedEpisode>, String> {
     let truncated = for_each_message(bag, |m| {
         match m.type_name {
             "composuite_msgs/msg/Scene" => {
-                let scene: msg::Scene =
-                    cdr::decode(m.data).map_err(|e| format!("{}: {e}", m.topic))?;
+                let scene: msg::Scene = m.decode()?;
                 let task =
                     convert::task_of(&scene.task).map_err(|e| format!("{}: {e}", m.topic))?;
                 scenes.insert(
@@ -73,8 +72,7 @@ pub fn recorded_episodes(bag: &Path) -> Result<Vec<RecordedEpisode>, String> {
                 );
             }
             "composuite_msgs/msg/Observation" => {
-                let o: msg::Observation =
-                    cdr::decode(m.data).map_err(|e| format!("{}: {e}", m.topic))?;
+                let o: msg::Observation = m.decode()?;
                 let key = (namespace_of(m.topic), o.episode);
                 let q = &o.object.orientation;
                 let p = &o.object.position;

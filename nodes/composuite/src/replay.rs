@@ -16,8 +16,8 @@ use composuite_core::TaskSpec;
 use composuite_core::control::{validate_arm_targets, validate_gripper_width};
 use composuite_core::env::{Action, Env, EnvConfig};
 use composuite_core::physics::robot_model;
+use composuite_msgs::msg;
 use composuite_msgs::sensor_msgs::msg::JointState;
-use composuite_msgs::{cdr, msg};
 use composuite_ros::bag::reader::for_each_message;
 use composuite_ros::shared::convert;
 
@@ -93,12 +93,11 @@ fn read(bag: &Path) -> Result<BTreeMap<Key, Recorded>, String> {
     let mut observations: Vec<(Key, u32, u64, Vec<f64>)> = Vec::new();
     let mut rewards: Vec<(Key, u32, f64)> = Vec::new();
     let mut commands: BTreeMap<String, Vec<(u64, JointState)>> = BTreeMap::new();
-    let decode_error = |topic: &str, e: cdr::CdrError| format!("{topic}: {e}");
     let truncated = for_each_message(bag, |m| {
         let ns = namespace_of(m.topic);
         match (m.type_name, m.topic.rsplit('/').next()) {
             ("composuite_msgs/msg/Scene", _) => {
-                let s: msg::Scene = cdr::decode(m.data).map_err(|e| decode_error(m.topic, e))?;
+                let s: msg::Scene = m.decode()?;
                 let task = convert::task_of(&s.task).map_err(|e| format!("{}: {e}", m.topic))?;
                 episodes.entry((ns, s.episode)).or_insert(Recorded {
                     task,
@@ -110,17 +109,15 @@ fn read(bag: &Path) -> Result<BTreeMap<Key, Recorded>, String> {
                 });
             }
             ("composuite_msgs/msg/Observation", _) => {
-                let o: msg::Observation =
-                    cdr::decode(m.data).map_err(|e| decode_error(m.topic, e))?;
+                let o: msg::Observation = m.decode()?;
                 observations.push(((ns, o.episode), o.step, m.publish_time, o.flat));
             }
             ("composuite_msgs/msg/StagedReward", _) => {
-                let r: msg::StagedReward =
-                    cdr::decode(m.data).map_err(|e| decode_error(m.topic, e))?;
+                let r: msg::StagedReward = m.decode()?;
                 rewards.push(((ns, r.episode), r.step, r.total));
             }
             ("sensor_msgs/msg/JointState", Some("joint_command")) => {
-                let c: JointState = cdr::decode(m.data).map_err(|e| decode_error(m.topic, e))?;
+                let c: JointState = m.decode()?;
                 commands.entry(ns).or_default().push((m.publish_time, c));
             }
             _ => {}

@@ -86,7 +86,13 @@ impl TaskFactor {
     }
 }
 
-/// The robot factor (32 values).
+/// Values in the robot factor, the last part of a flat observation.
+pub const ROBOT_FACTOR_LEN: usize = 3 * ARM_DOF + 3 + 4 + 2 + 2;
+/// Where `gripper_qpos` starts within the robot factor (after the joints' cos, sin and
+/// velocities and the eef's position and orientation).
+pub const GRIPPER_QPOS_IN_ROBOT: usize = 3 * ARM_DOF + 3 + 4;
+
+/// The robot factor ([`ROBOT_FACTOR_LEN`] = 32 values).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RobotFactor {
     /// cos of the arm joint positions.
@@ -237,6 +243,10 @@ impl Observation {
         out.extend(r.gripper_qpos);
         out.extend(r.gripper_qvel);
         debug_assert_eq!(out.len(), size);
+        debug_assert_eq!(
+            out[size - ROBOT_FACTOR_LEN + GRIPPER_QPOS_IN_ROBOT].to_bits(),
+            r.gripper_qpos[0].to_bits()
+        );
         out
     }
 }

@@ -15,7 +15,10 @@ use super::raster::Frame;
 use super::scene::{SceneRenderer, posed_camera_with};
 use crate::TaskSpec;
 use crate::kinematics::body_poses;
-use crate::obs::{FLAT_SIZE_WITH_TASK, FLAT_SIZE_WITHOUT_TASK, Observation};
+use crate::obs::{
+    FLAT_SIZE_WITH_TASK, FLAT_SIZE_WITHOUT_TASK, GRIPPER_QPOS_IN_ROBOT, Observation,
+    ROBOT_FACTOR_LEN,
+};
 use crate::physics::{ARM_DOF, RobotModel, robot_model};
 use crate::render::MAX_SIDE;
 
@@ -29,9 +32,6 @@ pub struct SceneState {
     /// The object's body pose in the world.
     pub object: Isometry3<f64>,
 }
-
-/// Where the robot factor starts in the flat observation without and with the task one-hots.
-const ROBOT_AT: [usize; 2] = [45, 61];
 
 impl SceneState {
     /// From an observation's factors: joint angles from their cosines and sines, the finger
@@ -68,9 +68,9 @@ impl SceneState {
     /// From the flat observation vector (93 values with the task one-hots, 77 without: the
     /// layout of [`Observation::flat`]).
     pub fn from_flat(flat: &[f64]) -> Result<SceneState, String> {
+        // The robot factor ends the flat vector, with or without the task one-hots.
         let robot = match flat.len() {
-            FLAT_SIZE_WITHOUT_TASK => ROBOT_AT[0],
-            FLAT_SIZE_WITH_TASK => ROBOT_AT[1],
+            n @ (FLAT_SIZE_WITHOUT_TASK | FLAT_SIZE_WITH_TASK) => n - ROBOT_FACTOR_LEN,
             n => {
                 return Err(format!(
                     "a flat observation has {FLAT_SIZE_WITH_TASK} values (with the task \
@@ -82,7 +82,7 @@ impl SceneState {
             return Err(format!("observation value {i} is not finite: {}", flat[i]));
         }
         let take = |at: usize| -> [f64; ARM_DOF] { std::array::from_fn(|j| flat[at + j]) };
-        let fingers_at = robot + 3 * ARM_DOF + 3 + 4;
+        let fingers_at = robot + GRIPPER_QPOS_IN_ROBOT;
         Ok(SceneState::from_factors(
             &take(robot),
             &take(robot + ARM_DOF),

@@ -28,6 +28,13 @@ pub struct RecordedMessage<'a> {
     pub data: &'a [u8],
 }
 
+impl RecordedMessage<'_> {
+    /// The message decoded as `T`; an error names the topic (`/env_00/scene: ...`).
+    pub fn decode<T: composuite_msgs::RosMessage>(&self) -> Result<T, String> {
+        composuite_msgs::cdr::decode(self.data).map_err(|e| format!("{}: {e}", self.topic))
+    }
+}
+
 /// The storage files of a bag: from `metadata.yaml` when there is one, else every
 /// `<name>_<N>.mcap` in numeric order (rosbag2's naming).
 pub fn data_files(dir: &Path) -> Result<Vec<PathBuf>, BagError> {
