@@ -83,18 +83,24 @@ def thread_cpu_ticks(root: int) -> dict[str, int]:
     return ticks
 
 
-def agent_process(namespaces: list[str], steps: int, ready, done) -> None:
-    """One agent of `step_together`: a vector env over its environments, reset, then `steps`
-    steps once every agent is ready; its elapsed seconds go to `done`."""
+def timed_steps(namespaces: list[str], steps: int, seed: int, before=lambda: None) -> float:
+    """A vector env over `namespaces`, reset; `before()`; then the seconds `steps` steps take."""
     vector = CompoSuiteRosVectorEnv(namespaces, TASK, timeout=60.0)
     vector.reset(seed=0)
-    rng = np.random.default_rng(len(namespaces))
-    ready.wait()
+    rng = np.random.default_rng(seed)
+    before()
     t0 = time.perf_counter()
     for _ in range(steps):
         vector.step(rng.uniform(-1, 1, (len(namespaces), 8)))
-    done.put(time.perf_counter() - t0)
+    elapsed = time.perf_counter() - t0
     vector.close()
+    return elapsed
+
+
+def agent_process(namespaces: list[str], steps: int, ready, done) -> None:
+    """One agent of `step_together`: its steps start once every agent is ready; its elapsed
+    seconds go to `done`."""
+    done.put(timed_steps(namespaces, steps, len(namespaces), ready.wait))
 
 
 def step_together(namespaces: list[str], steps: int, agents: int) -> float:
@@ -102,15 +108,7 @@ def step_together(namespaces: list[str], steps: int, agents: int) -> float:
     (agents = 1), or `agents` processes each stepping every agents-th environment."""
     agents = min(agents, len(namespaces))
     if agents == 1:
-        vector = CompoSuiteRosVectorEnv(namespaces, TASK, timeout=60.0)
-        vector.reset(seed=0)
-        rng = np.random.default_rng(0)
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            vector.step(rng.uniform(-1, 1, (len(namespaces), 8)))
-        elapsed = time.perf_counter() - t0
-        vector.close()
-        return steps * len(namespaces) / elapsed
+        return steps * len(namespaces) / timed_steps(namespaces, steps, 0)
     context = multiprocessing.get_context("spawn")
     ready, done = context.Barrier(agents + 1), context.Queue()
     workers = [context.Process(target=agent_process,

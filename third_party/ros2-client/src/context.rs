@@ -435,6 +435,13 @@ impl ContextInner {
     self.local_nodes.remove(node_fqn);
   }
 
+  // CompoSuite-ROS patch: publish, noting when and that nothing waits any more.
+  fn broadcast_now(&mut self, now: Instant) {
+    self.broadcast_node_infos();
+    self.last_broadcast = Some(now);
+    self.broadcast_due = false;
+  }
+
   // CompoSuite-ROS patch: publish now if the last publication is at least
   // NODE_INFO_MIN_INTERVAL old, otherwise leave it to the announcer thread.
   fn request_broadcast(&mut self, this: &Arc<Mutex<ContextInner>>) {
@@ -443,9 +450,7 @@ impl ContextInner {
       .last_broadcast
       .is_none_or(|last| now >= last + NODE_INFO_MIN_INTERVAL)
     {
-      self.broadcast_node_infos();
-      self.last_broadcast = Some(now);
-      self.broadcast_due = false;
+      self.broadcast_now(now);
       return;
     }
     self.broadcast_due = true;
@@ -461,9 +466,7 @@ impl ContextInner {
           Err(e) => {
             // No thread to defer to: publish now, as without coalescing.
             error!("Cannot start the ros_discovery_info announcer: {e}");
-            self.broadcast_node_infos();
-            self.last_broadcast = Some(now);
-            self.broadcast_due = false;
+            self.broadcast_now(now);
           }
         }
       }
@@ -509,9 +512,7 @@ fn announce_when_due(context: Weak<Mutex<ContextInner>>) {
       if !inner.broadcast_due {
         None
       } else if now >= due_at {
-        inner.broadcast_node_infos();
-        inner.last_broadcast = Some(now);
-        inner.broadcast_due = false;
+        inner.broadcast_now(now);
         None
       } else {
         Some(due_at - now)
