@@ -28,9 +28,8 @@ use crate::rng::Mt19937;
 #[cfg(test)]
 mod test;
 
-/// The most stages any objective has (pick-place, trash can and shelf have 5, push 3); rows of
-/// stage values are this wide, padded with 0.
-pub const MAX_STAGES: usize = 5;
+/// Rows of stage values are this wide (the most stages any objective has), padded with 0.
+pub use crate::reward::MAX_STAGES;
 
 /// What one environment does in a [`EnvBatch::run`] call.
 #[derive(Debug, Clone, Copy, PartialEq)]

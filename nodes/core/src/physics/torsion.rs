@@ -10,7 +10,7 @@
 //! friction does — MuJoCo's torsional friction, except that the cap is taken on its own rather
 //! than inside one elliptic cone with the sliding friction.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 
 use rapier3d::dynamics::{
     GenericJoint, GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, MotorModel,
@@ -35,6 +35,9 @@ pub struct TorsionalFriction {
     coefficients: Vec<f64>,
     /// The joint of each contact seen so far (disabled by a zero cap while out of contact).
     joints: BTreeMap<ContactKey, ImpulseJointHandle>,
+    /// This step's touching contacts (key, other body, normal, torque cap); kept between steps
+    /// so a step allocates nothing.
+    touching: Vec<(ContactKey, RigidBodyHandle, Vector, Real)>,
 }
 
 impl TorsionalFriction {
@@ -43,6 +46,7 @@ impl TorsionalFriction {
         TorsionalFriction {
             coefficients,
             joints: BTreeMap::new(),
+            touching: Vec::new(),
         }
     }
 
@@ -63,7 +67,8 @@ impl TorsionalFriction {
         let dt = physics.integration_parameters.dt;
         let centre = physics.bodies[object].center_of_mass();
         // (key, other body, spin axis, torque cap) of every touching contact.
-        let mut touching = Vec::new();
+        let mut touching = std::mem::take(&mut self.touching);
+        touching.clear();
         for pair in physics.narrow_phase.contact_pairs_with(collider) {
             let PairContacts::Rigid(rigid) = &pair.contacts else {
                 continue;
@@ -95,7 +100,6 @@ impl TorsionalFriction {
         }
         // Out of contact: no cap. Only joints that still hold one are touched (each mutable
         // access queues the joint for rapier's bookkeeping, every 2 ms step).
-        let touched: BTreeSet<ContactKey> = touching.iter().map(|t| t.0).collect();
         for (key, &handle) in &self.joints {
             let capped = physics
                 .impulse_joints
@@ -103,13 +107,13 @@ impl TorsionalFriction {
                 .and_then(|joint| joint.data.motor(JointAxis::AngZ))
                 .is_some_and(|motor| motor.max_force != 0.0);
             if capped
-                && !touched.contains(key)
+                && !touching.iter().any(|t| t.0 == *key)
                 && let Some(joint) = physics.impulse_joints.get_mut(handle, false)
             {
                 joint.data.set_motor_max_force(JointAxis::AngZ, 0.0);
             }
         }
-        for (key, other_body, normal, cap) in touching {
+        for &(key, other_body, normal, cap) in &touching {
             // The joint frame's z is the normal (either sign: friction does not care), expressed
             // in each body; both frames sit at the object's centre of mass.
             let normal = if normal.z < 0.0 { -normal } else { normal };
@@ -144,5 +148,6 @@ impl TorsionalFriction {
                 }
             }
         }
+        self.touching = touching;
     }
 }

@@ -53,13 +53,51 @@ pub struct Stage {
     pub max: f64,
 }
 
+/// The most stages any objective has (pick-place, trash can and shelf have 5, push 3).
+pub const MAX_STAGES: usize = 5;
+
+/// An objective's stages in its order, held inline: computing a step's reward allocates
+/// nothing. Reads as a slice of [`Stage`].
+#[derive(Clone, Copy)]
+pub struct Stages {
+    slots: [Stage; MAX_STAGES],
+    len: usize,
+}
+
+impl std::ops::Deref for Stages {
+    type Target = [Stage];
+    fn deref(&self) -> &[Stage] {
+        &self.slots[..self.len]
+    }
+}
+
+impl<'a> IntoIterator for &'a Stages {
+    type Item = &'a Stage;
+    type IntoIter = std::slice::Iter<'a, Stage>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl PartialEq for Stages {
+    fn eq(&self, other: &Stages) -> bool {
+        **self == **other
+    }
+}
+
+impl std::fmt::Debug for Stages {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
 /// The staged reward of one step, every stage exposed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StagedReward {
     /// The objective.
     pub objective: Objective,
     /// Every stage in the objective's order.
-    pub stages: Vec<Stage>,
+    pub stages: Stages,
     /// The reward: 1 on success, else the maximum stage value; in [0, 1].
     pub total: f64,
     /// Whether the objective's success test holds.
@@ -74,15 +112,23 @@ impl StagedReward {
         values: [f64; N],
         success: bool,
     ) -> Self {
-        let stages: Vec<Stage> = specs
-            .iter()
-            .zip(values)
-            .map(|(spec, value)| Stage {
+        const { assert!(N <= MAX_STAGES) };
+        let unused = Stage {
+            name: "",
+            value: 0.0,
+            max: 0.0,
+        };
+        let mut stages = Stages {
+            slots: [unused; MAX_STAGES],
+            len: N,
+        };
+        for ((slot, spec), value) in stages.slots.iter_mut().zip(specs).zip(values) {
+            *slot = Stage {
                 name: spec.name,
                 value,
                 max: spec.max,
-            })
-            .collect();
+            };
+        }
         let best = stages.iter().map(|s| s.value).fold(0.0, f64::max);
         StagedReward {
             objective,

@@ -67,4 +67,13 @@ impl<Handle, Object: HasModifiedFlag> ModifiedObjects<Handle, Object> {
         object.set_modified_flag();
         self.0.push(handle);
     }
+
+    /// CompoSuite-ROS patch: appends handles already in another set (their objects' MODIFIED
+    /// flags are set already), see `RigidBodySet::give_back_modified`.
+    pub(crate) fn extend_unchecked(&mut self, handles: &[Handle])
+    where
+        Handle: Copy,
+    {
+        self.0.extend_from_slice(handles);
+    }
 }

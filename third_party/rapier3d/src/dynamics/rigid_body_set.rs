@@ -114,6 +114,19 @@ impl RigidBodySet {
         core::mem::take(&mut self.modified_bodies)
     }
 
+    /// CompoSuite-ROS patch: hands back the list [`Self::take_modified`] took, emptied by the
+    /// pipeline, so the next step's modifications are pushed into its storage. The release let
+    /// it drop, and the list grew again from nothing every step (an allocation or more per step
+    /// whenever a body is written to between steps, as a controller's torques are). Handles
+    /// pushed since the take stay in the list, in order.
+    pub(crate) fn give_back_modified(&mut self, mut emptied: ModifiedRigidBodies) {
+        emptied.clear();
+        if !self.modified_bodies.is_empty() {
+            emptied.extend_unchecked(&self.modified_bodies);
+        }
+        self.modified_bodies = emptied;
+    }
+
     /// Returns how many rigid bodies are currently in this collection.
     pub fn len(&self) -> usize {
         self.bodies.len()

@@ -46,6 +46,11 @@ pub struct BroadPhaseBvh {
     #[cfg(not(feature = "parallel"))]
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     candidates_workspace: Vec<(u32, u32)>,
+    /// CompoSuite-ROS patch: the step's new pairs, kept between steps (the release collected
+    /// them into a new `Vec` at every step where a pair appeared).
+    #[cfg(not(feature = "parallel"))]
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    new_pairs_workspace: Vec<(ColliderHandle, ColliderHandle)>,
     /// Workspace: per-collider "was updated this step" bit (collider arena index), so the
     /// stale-pair scan can visit a pair from one side only when both sides moved.
     #[cfg_attr(feature = "serde-serialize", serde(skip))]

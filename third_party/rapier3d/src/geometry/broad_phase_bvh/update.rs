@@ -411,10 +411,14 @@ impl BroadPhaseBvh {
                     .collect()
             };
             #[cfg(not(feature = "parallel"))]
-            let new_pairs: Vec<(ColliderHandle, ColliderHandle)> =
-                candidates.iter().filter_map(filter_new).collect();
+            let new_pairs = {
+                let mut new_pairs = core::mem::take(&mut self.new_pairs_workspace);
+                new_pairs.clear();
+                new_pairs.extend(candidates.iter().filter_map(filter_new));
+                new_pairs
+            };
 
-            for (handle1, handle2) in new_pairs {
+            for &(handle1, handle2) in &new_pairs {
                 let prev = self.pairs.insert((handle1, handle2), self.frame_index);
                 debug_assert!(prev.is_none());
                 self.pair_adjacency
@@ -426,6 +430,10 @@ impl BroadPhaseBvh {
                 events.push(BroadPhasePairEvent::AddPair(ColliderPair::new(
                     handle1, handle2,
                 )));
+            }
+            #[cfg(not(feature = "parallel"))]
+            {
+                self.new_pairs_workspace = new_pairs;
             }
         }
 

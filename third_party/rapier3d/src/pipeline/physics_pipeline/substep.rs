@@ -1,7 +1,6 @@
 //! The pipeline's inner step loop: CCD substepping and motion clamping, plus
 //! end-of-step advancement of bodies, colliders and broad-phase AABBs.
 
-use crate::alloc_prelude::*;
 
 use crate::dynamics::{
     CCDSolver, ImpulseJointSet, IntegrationParameters, IslandManager, MultibodyJointSet,
@@ -413,10 +412,13 @@ impl PhysicsPipeline {
 
         // Persistent islands: apply the joint connectivity edits (in order).
         impulse_joints.flush_modified_joints();
-        let joint_island_events: Vec<_> = core::mem::take(&mut impulse_joints.island_events);
-        for event in joint_island_events {
+        // CompoSuite-ROS patch: drained, and the list's storage handed back (the release
+        // consumed it, so the next step's events grew a new one).
+        let mut joint_island_events = core::mem::take(&mut impulse_joints.island_events);
+        for event in joint_island_events.drain(..) {
             islands.apply_impulse_joint_island_event(bodies, event);
         }
+        impulse_joints.island_events = joint_island_events;
         let mut mb_chain_events = core::mem::take(&mut multibody_joints.island_chain_events);
         for mb_id in &mb_chain_events {
             islands.update_multibody_chain(bodies, multibody_joints, *mb_id);
@@ -465,6 +467,8 @@ impl PhysicsPipeline {
         self.counters.stages.user_changes.resume();
         self.clear_modified_colliders(colliders, &mut modified_colliders);
         self.clear_modified_bodies(bodies, &mut modified_bodies);
+        // CompoSuite-ROS patch: the emptied list's storage is kept for the next step.
+        bodies.give_back_modified(modified_bodies);
         removed_colliders.clear();
         self.counters.stages.user_changes.pause();
 

@@ -72,6 +72,11 @@ pub struct ImpulseJointSet {
     /// identical, so the caller's previous output is reused untouched.
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     selection_epochs: Option<(u32, u32)>,
+    /// CompoSuite-ROS patch: the joints [`Self::select_active_interactions`] looks at, kept
+    /// between calls (the release collected them into a new `Vec` at each call — every step
+    /// while a joint is written to, as the torsion joints are).
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    selection_candidates: Vec<u32>,
 }
 
 impl ImpulseJointSet {
@@ -88,6 +93,7 @@ impl ImpulseJointSet {
             all_joints_modified: false,
             assembly_epoch: 0,
             selection_epochs: None,
+            selection_candidates: Vec::new(),
         }
     }
 
@@ -574,7 +580,8 @@ impl ImpulseJointSet {
         // Only iterate joints adjacent to an active body instead of the whole graph: any joint
         // selected below has at least one awake dynamic/kinematic body, so the neighborhood walk
         // is exhaustive — and much smaller when most of the scene is asleep.
-        let mut candidates: Vec<u32> = Vec::new();
+        let mut candidates = core::mem::take(&mut self.selection_candidates);
+        candidates.clear();
 
         // When most bodies are awake, walking the graph adjacency (pointer-chasing) and sorting
         // costs more than the linear edge scan it replaces — just visit every joint and let the
@@ -622,6 +629,7 @@ impl ImpulseJointSet {
                 out.push(i);
             }
         }
+        self.selection_candidates = candidates;
     }
 
     /// Removes a joint from the world.

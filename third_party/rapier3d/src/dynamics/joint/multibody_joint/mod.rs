@@ -23,6 +23,11 @@ mod multibody_joint_handle;
 mod multibody_joint_set;
 #[cfg(feature = "alloc")]
 mod multibody_link;
+// CompoSuite-ROS patch: the mass matrix's LU kept in the multibody.
+#[cfg(feature = "alloc")]
+mod multibody_lu;
+#[cfg(feature = "alloc")]
+pub use self::multibody_lu::MultibodyLu;
 #[cfg(feature = "alloc")]
 mod multibody_workspace;
 

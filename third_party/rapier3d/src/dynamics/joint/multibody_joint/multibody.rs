@@ -1,4 +1,5 @@
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
+use super::multibody_lu::MultibodyLu;
 use super::multibody_workspace::MultibodyWorkspace;
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
@@ -15,7 +16,7 @@ use crate::prelude::MultibodyJoint;
 use crate::utils::mat_to_na;
 use crate::utils::{AngularInertiaOps, CrossProduct, CrossProductMatrix, IndexMut2, vect_to_na};
 use na::{
-    self, DMatrix, DVectorView, DVectorViewMut, Dyn, LU, OMatrix, SMatrix, SVector, StorageMut,
+    self, DMatrix, DVectorView, DVectorViewMut, Dyn, OMatrix, SMatrix, SVector, StorageMut,
 };
 
 #[cfg(doc)]
@@ -206,13 +207,14 @@ pub struct Multibody {
     //       move dofs from/to a format that matches the augmented mass.
     // TODO: use sparse matrices?
     augmented_mass: DMatrix<Real>,
-    inv_augmented_mass: LU<Real, Dyn, Dyn>,
+    // CompoSuite-ROS patch: factorised in place (`multibody_lu.rs`), not a new `LU` per step.
+    inv_augmented_mass: MultibodyLu,
     // The indexing sequence for moving all kinematics degrees of
     // freedoms to the end of the generalized coordinates vector.
     augmented_mass_indices: IndexSequence,
 
     acc_augmented_mass: DMatrix<Real>,
-    acc_inv_augmented_mass: LU<Real, Dyn, Dyn>,
+    acc_inv_augmented_mass: MultibodyLu,
 
     ndofs: usize,
     pub(crate) root_is_dynamic: bool,
@@ -237,6 +239,32 @@ pub struct Multibody {
     /// CompoSuite-ROS patch: `M⁻¹·e_k` for every DoF k (column k), solved with
     /// `inv_augmented_mass` whenever it is refactorised (see `solve_unit_row`).
     inv_mass_columns: DMatrix<Real>,
+    /// CompoSuite-ROS patch: the energy guard's vectors, kept between steps.
+    guard: EnergyGuardWorkspace,
+}
+
+/// CompoSuite-ROS patch: what `update_acceleration` and `free_velocity_energy_guard` need when
+/// the guard runs (a joint faster than 0.5 rad/s at 2 ms steps). The release allocated these
+/// eight vectors anew each time; here they keep their storage, and hold the same values.
+#[derive(Clone, Debug, Default)]
+struct EnergyGuardWorkspace {
+    pos_forces: DVector,
+    gen_forces: DVector,
+    v: DVector,
+    f: DVector,
+    f_pos: DVector,
+    a: DVector,
+    m_a: DVector,
+    m_v: DVector,
+}
+
+/// `vector` as `len` zeros, in its own storage when the length is unchanged.
+fn zeroed(vector: &mut DVector, len: usize) {
+    if vector.len() == len {
+        vector.fill(0.0);
+    } else {
+        *vector = DVector::zeros(len);
+    }
 }
 impl Default for Multibody {
     fn default() -> Self {
@@ -260,9 +288,9 @@ impl Multibody {
             accelerations: DVector::zeros(0),
             body_jacobians: Vec::new(),
             augmented_mass: DMatrix::zeros(0, 0),
-            inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
+            inv_augmented_mass: MultibodyLu::default(),
             acc_augmented_mass: DMatrix::zeros(0, 0),
-            acc_inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
+            acc_inv_augmented_mass: MultibodyLu::default(),
             augmented_mass_indices: IndexSequence::new(),
             ndofs: 0,
             solver_id: 0,
@@ -276,6 +304,7 @@ impl Multibody {
             fk_inputs: Vec::new(),
             fk_inputs_now: Vec::new(),
             inv_mass_columns: DMatrix::zeros(0, 0),
+            guard: EnergyGuardWorkspace::default(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
     }
@@ -468,8 +497,8 @@ impl Multibody {
         self.self_contacts_enabled = enabled;
     }
 
-    /// The inverse augmented mass matrix of this multibody.
-    pub fn inv_augmented_mass(&self) -> &LU<Real, Dyn, Dyn> {
+    /// The inverse augmented mass matrix of this multibody (its LU factorisation).
+    pub fn inv_augmented_mass(&self) -> &MultibodyLu {
         &self.inv_augmented_mass
     }
 
@@ -645,11 +674,16 @@ impl Multibody {
         let check_implicit_coriolis_divergence = dt * self.velocities.amax() >= 1.0e-3;
         // Generalized forces that derive from positions or external inputs
         // (gravity, user forces, spring position terms).
-        let mut pos_forces = DVector::zeros(if check_implicit_coriolis_divergence {
-            self.ndofs
-        } else {
-            0
-        });
+        let mut guard = core::mem::take(&mut self.guard);
+        let pos_forces = &mut guard.pos_forces;
+        zeroed(
+            pos_forces,
+            if check_implicit_coriolis_divergence {
+                self.ndofs
+            } else {
+                0
+            },
+        );
 
         // Eqn 42 to 45
         for i in 0..self.links.len() {
@@ -751,11 +785,10 @@ impl Multibody {
 
         // Snapshot the full generalized forces: the energy guard may need them
         // for a re-solve with the plain mass matrix.
-        let gen_forces = if check_implicit_coriolis_divergence {
-            self.accelerations.clone()
-        } else {
-            DVector::zeros(0)
-        };
+        if check_implicit_coriolis_divergence {
+            zeroed(&mut guard.gen_forces, self.accelerations.len());
+            guard.gen_forces.copy_from(&self.accelerations);
+        }
 
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut self.accelerations, |accs| {
@@ -763,8 +796,9 @@ impl Multibody {
             });
 
         if check_implicit_coriolis_divergence {
-            self.free_velocity_energy_guard(dt, &gen_forces, &pos_forces);
+            self.free_velocity_energy_guard(dt, &mut guard);
         }
+        self.guard = guard;
     }
 
     // If the semi-implicit coriolis solve introduces more energy than the external
@@ -776,39 +810,53 @@ impl Multibody {
     // (indicating undesired/unrealistic energy injection), we fall back to re-solving
     // the forces effect but using only the mass matrix without the implicit coriolis
     // terms.
-    fn free_velocity_energy_guard(&mut self, dt: Real, gen_forces: &DVector, pos_forces: &DVector) {
+    fn free_velocity_energy_guard(&mut self, dt: Real, guard: &mut EnergyGuardWorkspace) {
         let eff_dim = self.augmented_mass_indices.dim_after_removal(self.ndofs);
         if eff_dim == 0 {
             return;
         }
+        let gen_forces = &guard.gen_forces;
 
         // Move all quantities to the kinematic-reduced ordering of the
         // factorized matrices (no-op when there is no kinematic dof).
-        let mut v = self.velocities.clone();
-        let mut f = gen_forces.clone();
-        let mut f_pos = pos_forces.clone();
-        self.augmented_mass_indices.rearrange_rows(&mut v, true);
-        self.augmented_mass_indices.rearrange_rows(&mut f, true);
-        self.augmented_mass_indices.rearrange_rows(&mut f_pos, true);
+        // CompoSuite-ROS patch: copies into the guard's kept vectors, not clones; the products
+        // below write into kept vectors too (`mul_to` runs the same `gemm` as `*`).
+        let copy = |to: &mut DVector, from: &DVector| {
+            zeroed(to, from.len());
+            to.copy_from(from);
+        };
+        copy(&mut guard.v, &self.velocities);
+        copy(&mut guard.f, gen_forces);
+        copy(&mut guard.f_pos, &guard.pos_forces);
+        self.augmented_mass_indices
+            .rearrange_rows(&mut guard.v, true);
+        self.augmented_mass_indices
+            .rearrange_rows(&mut guard.f, true);
+        self.augmented_mass_indices
+            .rearrange_rows(&mut guard.f_pos, true);
+        zeroed(&mut guard.m_a, eff_dim);
+        zeroed(&mut guard.m_v, eff_dim);
 
         let m = self.augmented_mass.view((0, 0), (eff_dim, eff_dim));
-        let v = v.rows(0, eff_dim);
-        let f = f.rows(0, eff_dim);
-        let f_pos = f_pos.rows(0, eff_dim);
+        let v = guard.v.rows(0, eff_dim);
+        let f = guard.f.rows(0, eff_dim);
+        let f_pos = guard.f_pos.rows(0, eff_dim);
+        let (a_all, m_a, m_v) = (&mut guard.a, &mut guard.m_a, &mut guard.m_v);
 
-        let energy_delta_minus_work = |accelerations: &DVector| -> Option<Real> {
-            let mut a = accelerations.clone();
-            self.augmented_mass_indices.rearrange_rows(&mut a, true);
-            let a = a.rows(0, eff_dim).into_owned();
+        let mut energy_delta_minus_work = |accelerations: &DVector| -> Option<Real> {
+            copy(a_all, accelerations);
+            self.augmented_mass_indices.rearrange_rows(a_all, true);
+            let a = a_all.rows(0, eff_dim);
             if !a.iter().all(|x| x.is_finite()) {
                 return None;
             }
-            let m_a = m * &a;
-            let energy_delta = dt * v.dot(&m_a) + 0.5 * dt * dt * a.dot(&m_a);
+            m.mul_to(&a, m_a);
+            let energy_delta = dt * v.dot(m_a) + 0.5 * dt * dt * a.dot(m_a);
             let work = dt * v.dot(&f) + 0.5 * dt * dt * a.dot(&f_pos);
             // Margin: a small fraction of the current kinetic energy to absorb
             // discretization error on healthy steps.
-            let kinetic_energy = 0.5 * v.dot(&(m * v));
+            m.mul_to(&v, m_v);
+            let kinetic_energy = 0.5 * v.dot(m_v);
             let energy_margin = 1.0e-2 * kinetic_energy + 1.0e-8;
             Some(energy_delta - work - energy_margin)
         };
@@ -1228,18 +1276,12 @@ impl Multibody {
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
-        // TODO: avoid allocation inside LU at each timestep.
-        // CompoSuite-ROS patch: with no DoF removed, the matrix is copied whole (one `memcpy`)
-        // instead of element by element through a view (~2,400 instructions per copy for 9 DoFs).
-        let factorised = |m: &DMatrix<Real>| {
-            if effective_dim == m.nrows() {
-                LU::new(m.clone())
-            } else {
-                LU::new(m.view((0, 0), (effective_dim, effective_dim)).into_owned())
-            }
-        };
-        self.acc_inv_augmented_mass = factorised(&self.acc_augmented_mass);
-        self.inv_augmented_mass = factorised(&self.augmented_mass);
+        // CompoSuite-ROS patch: factorised in place, in storage kept from the last step (the
+        // release allocated a matrix copy and a permutation per factorisation, twice a step).
+        self.acc_inv_augmented_mass
+            .factorise(&self.acc_augmented_mass, effective_dim);
+        self.inv_augmented_mass
+            .factorise(&self.augmented_mass, effective_dim);
 
         // CompoSuite-ROS patch: every column of M⁻¹ once, for the unit rows to share.
         let n = self.ndofs;
@@ -1249,9 +1291,7 @@ impl Multibody {
             }
             for k in 0..n {
                 let mut column = self.inv_mass_columns.column_mut(k);
-                column.fill(0.0);
-                column[k] = 1.0;
-                self.inv_augmented_mass.solve_mut(&mut column);
+                self.inv_augmented_mass.solve_unit(k, &mut column);
             }
         } else {
             self.inv_mass_columns = DMatrix::zeros(0, 0);

@@ -98,8 +98,19 @@ impl VelocitySolver {
             }
         }
 
-        self.generic_solver_vels_increment = DVector::zeros(multibody_solver_id as usize);
-        self.generic_solver_vels = DVector::zeros(multibody_solver_id as usize);
+        // CompoSuite-ROS patch: zeroed in place when the length is unchanged (the release
+        // allocated both vectors anew every step).
+        let generic_len = multibody_solver_id as usize;
+        for vels in [
+            &mut self.generic_solver_vels_increment,
+            &mut self.generic_solver_vels,
+        ] {
+            if vels.len() == generic_len {
+                vels.fill(0.0);
+            } else {
+                *vels = DVector::zeros(generic_len);
+            }
+        }
 
         for link in &self.multibody_roots {
             let multibody = multibodies

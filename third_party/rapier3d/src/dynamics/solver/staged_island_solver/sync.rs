@@ -63,6 +63,22 @@ impl StageSync {
         }
     }
 
+    /// CompoSuite-ROS patch: the state [`Self::new`] gives, in this sync's own storage (the
+    /// release built a new one, a heap allocation for the cursors, every step).
+    pub(super) fn restart(&mut self, num_workers: usize) {
+        if self.cursors.len() != num_workers {
+            *self = Self::new(num_workers);
+            return;
+        }
+        self.num_workers = num_workers;
+        *self.published.get_mut() = 0;
+        *self.advance_ticket.get_mut() = 0;
+        *self.completed.get_mut() = 0;
+        for cursor in &mut self.cursors {
+            *cursor.0.get_mut() = 0;
+        }
+    }
+
     /// Records `count` executed units of `stage` (total `stage_work`, identical across workers).
     /// The completion crossing the total advances the stage right here, so [`Self::sync`] waiters
     /// only *read* `published` — no RMWs while spinning. Sound unconditionally: an incomplete
