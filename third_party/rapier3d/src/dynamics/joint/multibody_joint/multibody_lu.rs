@@ -30,6 +30,10 @@ impl Default for MultibodyLu {
     }
 }
 
+/// Systems up to this size are solved in a stack copy of the right-hand side (a 9-DoF arm and
+/// gripper is 9), larger ones in a heap copy (allocated per solve).
+const STACK_DIM: usize = 32;
+
 impl MultibodyLu {
     /// Factorises the leading `dim × dim` block of `m`, reusing this factorisation's storage.
     pub fn factorise(&mut self, m: &DMatrix<Real>, dim: usize) {
@@ -38,40 +42,52 @@ impl MultibodyLu {
             self.swaps = Vec::with_capacity(dim);
         }
         if dim == m.nrows() {
-            self.lu.copy_from(m);
+            // One `memcpy` (nalgebra's `copy_from` copies entry by entry).
+            self.lu.as_mut_slice().copy_from_slice(m.as_slice());
         } else {
             self.lu.copy_from(&m.view((0, 0), (dim, dim)));
         }
         self.swaps.clear();
 
-        let lu = &mut self.lu;
+        // Column-major: entry (r, c) is `data[c * dim + r]`, a column is one slice.
+        let data = self.lu.as_mut_slice();
         for i in 0..dim {
             // The first row holding the column's largest |entry| (nalgebra's `icamax`).
+            let column = &data[i * dim..(i + 1) * dim];
             let mut pivot = i;
-            let mut largest = lu[(i, i)].abs();
-            for r in i + 1..dim {
-                let value = lu[(r, i)].abs();
-                if value > largest {
-                    largest = value;
+            let mut largest = column[i].abs();
+            for (r, value) in column.iter().enumerate().skip(i + 1) {
+                if value.abs() > largest {
+                    largest = value.abs();
                     pivot = r;
                 }
             }
-            let diag = lu[(pivot, i)];
+            let diag = column[pivot];
             if diag == 0.0 {
                 continue; // No non-zero entry in this column.
             }
             if pivot != i {
                 self.swaps.push((i, pivot));
-                lu.swap_rows(i, pivot);
+                for c in 0..dim {
+                    data.swap(c * dim + i, c * dim + pivot);
+                }
             }
             let inv_diag = 1.0 / diag;
-            for r in i + 1..dim {
-                lu[(r, i)] *= inv_diag;
+            for value in &mut data[i * dim + i + 1..(i + 1) * dim] {
+                *value *= inv_diag;
             }
+            // The columns are 9 long here: slicing them costs more than the arithmetic, so the
+            // entries are read unchecked (every index is below dim², checked once).
+            assert!(data.len() == dim * dim);
             for k in i + 1..dim {
-                let a = -lu[(i, k)];
-                for r in i + 1..dim {
-                    lu[(r, k)] = a * lu[(r, i)] + lu[(r, k)];
+                // SAFETY: i, k, r < dim, so every index is < dim * dim = data.len().
+                unsafe {
+                    let a = -*data.get_unchecked(k * dim + i);
+                    for r in i + 1..dim {
+                        let l = *data.get_unchecked(i * dim + r);
+                        let value = data.get_unchecked_mut(k * dim + r);
+                        *value = a * l + *value;
+                    }
                 }
             }
         }
@@ -83,58 +99,104 @@ impl MultibodyLu {
     }
 
     /// Solves `M·x = e_k` into `out`: the same solution as [`Self::solve_mut`] of the unit
-    /// vector, with the forward substitution started at the row its 1 lands on — the rows
-    /// before it stay exact zeros, so skipping them changes no bit.
+    /// vector. The permuted unit vector is built directly (its 1 where the row swaps take row
+    /// `k`), and the forward substitution starts at that row — the rows before it stay exact
+    /// zeros, so skipping them changes no bit.
     pub fn solve_unit<S: StorageMut<Real, Dyn, U1>>(
         &self,
         k: usize,
         out: &mut Matrix<Real, Dyn, U1, S>,
     ) {
-        out.fill(0.0);
-        out[k] = 1.0;
+        let dim = self.lu.nrows();
+        assert_eq!(dim, out.nrows(), "LU solve dimension mismatch.");
+        let mut first = k;
         for &(i, pivot) in &self.swaps {
-            out.swap_rows(i, pivot);
+            if first == i {
+                first = pivot;
+            } else if first == pivot {
+                first = i;
+            }
         }
-        let first = (0..out.nrows()).find(|&r| out[r] != 0.0).unwrap_or(0);
-        self.substitute(out, first);
+        if dim > STACK_DIM {
+            out.fill(0.0);
+            out[k] = 1.0;
+            self.solve_from(out, first);
+            return;
+        }
+        let mut x = [0.0; STACK_DIM];
+        x[first] = 1.0;
+        self.substitute(&mut x[..dim], first);
+        for (r, value) in x[..dim].iter().enumerate() {
+            out[r] = *value;
+        }
     }
 
+    /// Solves in a copy of `b` (on the stack up to [`STACK_DIM`]) with contiguous slices, the
+    /// forward substitution from row `first` of the permuted vector.
     fn solve_from<S: StorageMut<Real, Dyn, U1>>(
         &self,
         b: &mut Matrix<Real, Dyn, U1, S>,
         first: usize,
     ) {
-        assert_eq!(self.lu.nrows(), b.nrows(), "LU solve dimension mismatch.");
-        for &(i, pivot) in &self.swaps {
-            b.swap_rows(i, pivot);
+        let dim = self.lu.nrows();
+        assert_eq!(dim, b.nrows(), "LU solve dimension mismatch.");
+        let mut stack = [0.0; STACK_DIM];
+        let mut heap = Vec::new();
+        let x = if dim <= STACK_DIM {
+            &mut stack[..dim]
+        } else {
+            heap.resize(dim, 0.0);
+            &mut heap[..]
+        };
+        for (r, value) in x.iter_mut().enumerate() {
+            *value = b[r];
         }
-        self.substitute(b, first);
+        self.permute_and_substitute(x, first);
+        for (r, value) in x.iter().enumerate() {
+            b[r] = *value;
+        }
     }
 
-    /// Forward substitution with `L` (from row `first`), then back substitution with `U`.
-    fn substitute<S: StorageMut<Real, Dyn, U1>>(
-        &self,
-        b: &mut Matrix<Real, Dyn, U1, S>,
-        first: usize,
-    ) {
-        let lu = &self.lu;
-        let dim = lu.nrows();
+    /// The row swaps, then [`Self::substitute`].
+    fn permute_and_substitute(&self, x: &mut [Real], first: usize) {
+        for &(i, pivot) in &self.swaps {
+            x.swap(i, pivot);
+        }
+        self.substitute(x, first);
+    }
+
+    /// Forward substitution with `L` (from row `first`), then back substitution with `U`, each
+    /// update `y = a·x + y` as nalgebra's `axpy` takes it.
+    fn substitute(&self, x: &mut [Real], first: usize) {
+        let dim = x.len();
+        let data = self.lu.as_slice();
+        assert!(data.len() == dim * dim);
+        // SAFETY (both loops): i, r < dim, so indices into `data` are < dim * dim and into `x`
+        // < dim.
         for i in first..dim.saturating_sub(1) {
-            let a = -b[i];
-            for r in i + 1..dim {
-                b[r] = a * lu[(r, i)] + b[r];
+            unsafe {
+                let a = -*x.get_unchecked(i);
+                for r in i + 1..dim {
+                    let l = *data.get_unchecked(i * dim + r);
+                    let value = x.get_unchecked_mut(r);
+                    *value = a * l + *value;
+                }
             }
         }
         for i in (0..dim).rev() {
-            let diag = lu[(i, i)];
+            let diag = data[i * dim + i];
             if diag == 0.0 {
                 return; // Singular: nalgebra stops here too.
             }
-            let coeff = b[i] / diag;
-            b[i] = coeff;
+            let coeff = x[i] / diag;
+            x[i] = coeff;
             let a = -coeff;
-            for r in 0..i {
-                b[r] = a * lu[(r, i)] + b[r];
+            unsafe {
+                for r in 0..i {
+                    let u = *data.get_unchecked(i * dim + r);
+                    let value = x.get_unchecked_mut(r);
+                    *value = a * u + *value;
+                }
             }
         }
     }
@@ -163,7 +225,7 @@ mod tests {
     #[test]
     fn factors_and_solutions_equal_nalgebras_bit_for_bit() {
         let mut lu = MultibodyLu::default();
-        for (seed, dim) in [(1, 9), (2, 9), (3, 7), (4, 1), (5, 12), (6, 9)] {
+        for (seed, dim) in [(1, 9), (2, 9), (3, 7), (4, 1), (5, 12), (6, 9), (7, 40)] {
             let m = DMatrix::from_vec(dim, dim, values(seed, dim * dim));
             // Symmetric positive definite, as a mass matrix is, and a general one.
             let spd = &m * m.transpose() + DMatrix::identity(dim, dim) * 0.1;
