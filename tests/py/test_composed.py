@@ -74,8 +74,9 @@ def last_episode_steps(seen: list[tuple[int, int]]) -> list[int]:
 def test_each_step_is_handed_over_once_in_the_process_and_still_goes_on_the_wire(suite):
     from composuite_msgs.msg import StagedReward, WorldState
     ns = NAMESPACES[1]
-    assert f"{ns}/reward up; world_state handed over in this process" in suite.text()
-    assert "world_state and observation handed over in this process" in suite.text()
+    suite.wait_for_log(f"{ns}/reward up; world_state handed over in this process")
+    suite.wait_for_log(f"{ns}/task_manager up: task {TASK}, services in the fastdds format; "
+                       "world_state and observation handed over in this process")
     agent = RclpyAgent(suite.domain)
     worlds, rewards = [], []
     try:
