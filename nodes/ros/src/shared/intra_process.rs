@@ -1,21 +1,22 @@
 //! Intra-process hand-off, as ROS 2's intra-process communication does it: inside one composed
 //! process a message goes from its publisher to the subscriptions of the same topic in that
-//! process directly (a clone through a channel), without the DDS round trip — serialising,
-//! the participant's event loop, a loopback datagram, its reception and deserialising, and the
-//! wake-up of the reader's thread. The same message still goes on the wire, for every reader
-//! outside the process (agents, the recorder, `ros2 topic echo`).
+//! process directly (a clone through a channel), so they need not wait for the DDS round trip —
+//! the participant's event loop, a loopback datagram, its reception and the wake-up of the
+//! reader's thread. The same message still goes on the wire, for every reader outside the
+//! process (agents, the recorder, `ros2 topic echo`).
 //!
 //! A subscription in the process also receives the wire copy of a message it already got in
 //! the process (the participant's readers match its writers like any others): it drops every
-//! wire sample whose writer hands its messages over here, so each message is taken once.
-//! Samples of other writers (another process's, a publisher that is not handed over) come by
-//! the wire as before.
+//! wire sample whose writer hands its messages over here, so each message is taken once. The
+//! hand-off saves the wait, not the wire's work: those copies are still sent, received and
+//! decoded before they are dropped. Samples of other writers (another process's, a publisher
+//! that is not handed over) come by the wire as before.
 //!
-//! Only volatile topics with a reliable publisher are handed over, as rclcpp does: a volatile
-//! subscription gets what is published after it exists and nothing older, which a channel
-//! gives, and a reliable publisher reaches every matching subscription. Latched topics (the
-//! scene, once per episode) keep their history on the wire. A subscription's queue keeps its
-//! QoS depth, dropping the oldest message when full, like a keep-last reader cache.
+//! Only volatile topics with a reliable publisher are handed over: a volatile subscription gets
+//! what is published after it exists and nothing older, which a channel gives, and a reliable
+//! publisher reaches every matching subscription. Latched topics (the scene, once per episode)
+//! keep their history on the wire. A subscription's queue keeps its QoS depth, dropping the
+//! oldest message when full, like a keep-last reader cache.
 
 use std::any::Any;
 use std::collections::{HashMap, HashSet};
