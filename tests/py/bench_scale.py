@@ -3,7 +3,7 @@ one DDS participant: the default) or `--isolate` (a process per node). Figures o
 asserted. Run through `scripts/bench-scale`, which builds the release binaries and enters the
 loopback-only namespace.
 
-    python tests/py/bench_scale.py --envs 1 8 32 64 [--isolate | --processes K] [--agents K] [--idle 30] [--json]
+    python tests/py/bench_scale.py --envs 1 8 32 64 [--isolate | --processes K] [--threads N] [--agents K] [--idle 30] [--json]
 
 Per N: processes of the suite, RSS in all and per environment, the suite's idle CPU (% of one
 core) over `--idle` seconds once every environment answered, the seconds from launch until
@@ -123,15 +123,16 @@ def step_together(namespaces: list[str], steps: int, agents: int) -> float:
     return steps * len(namespaces) / elapsed
 
 
-def bench(n: int, isolate: bool, processes: int, agents: int, idle: float, steps: int,
-          breakdown: bool) -> dict:
+def bench(n: int, isolate: bool, processes: int, threads: int | None, agents: int, idle: float,
+          steps: int, breakdown: bool) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="bench_scale_"))
     domain = node_suite.random_domain()
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
     env["ROS_DOMAIN_ID"] = str(domain)
     os.environ["ROS_DOMAIN_ID"] = str(domain)
     extra = (["--envs", str(n)] if n > 1 else []) + (["--isolate"] if isolate else []) \
-        + (["--processes", str(min(processes, n))] if processes > 1 and n > 1 else [])
+        + (["--processes", str(min(processes, n))] if processes > 1 and n > 1 else []) \
+        + (["--threads", str(threads)] if threads and n > 1 and not isolate else [])
     log = folder / "launch.stderr"
     started = time.monotonic()
     with open(log, "wb") as stderr:
@@ -203,6 +204,9 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=500, help="steps of env_00 stepped alone")
     parser.add_argument("--processes", type=int, default=1,
                         help="composed environments split over this many processes")
+    parser.add_argument("--threads", type=int, default=None,
+                        help="threads stepping the composed environments' physics (launch --threads; "
+                             "default: launch's, one per core)")
     parser.add_argument("--agents", type=int, default=1,
                         help="step all environments with this many agent processes (each a vector "
                              "env over every K-th environment) instead of one")
@@ -211,14 +215,15 @@ def main() -> None:
                         help="also print the idle CPU by thread name (where it goes)")
     args = parser.parse_args()
     if any(n < 1 for n in args.envs) or args.idle <= 0 or args.steps < 1 or args.processes < 1 \
-            or args.agents < 1:
-        parser.error("--envs, --idle, --steps, --processes and --agents must be positive")
+            or args.agents < 1 or (args.threads is not None and args.threads < 1):
+        parser.error("--envs, --idle, --steps, --processes, --threads and --agents must be positive")
     rows = []
     if not args.json:
         print("envs  mode      procs  RSS MB  per env  idle CPU  up s  answered s  alone steps/s (p99 ms)"
               "  together steps/s", flush=True)
     for n in args.envs:
-        r = bench(n, args.isolate, args.processes, args.agents, args.idle, args.steps, args.breakdown)
+        r = bench(n, args.isolate, args.processes, args.threads, args.agents, args.idle, args.steps,
+                  args.breakdown)
         rows.append(r)
         if not args.json:
             print(f"{r['envs']:4d}  {r['mode']:8s}  {r['processes']:5d}  {r['rss_mb']:6.0f}  "

@@ -5,7 +5,9 @@ nodes), each environment steps bit-identical to the in-process env, and a node t
 sim's `fault_panic` parameter) takes down only its environment, which launch starts again
 while the others go on stepping. The standard simulation interfaces (simulation_interfaces) answer
 in every environment's namespace as they do for separate processes. `--processes 2` splits the
-environments over two child processes; a SIGKILL of one restarts its share only."""
+environments over two child processes; a SIGKILL of one restarts its share only. The physics runs
+on the `--threads` asked for, and each environment's sim hands world_state to its reward node in
+the process: the reward node scores each step once, and an outside reader still gets every step."""
 
 from __future__ import annotations
 
@@ -34,7 +36,7 @@ NAMESPACES = [f"{NS}/env_{i:02}" for i in range(ENVS)]
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory):
     with launch_running(tmp_path_factory.mktemp("composed"), NS, TASK, "--envs", str(ENVS),
-                        "--respawn", "2", "--respawn-delay", "0.5",
+                        "--respawn", "2", "--respawn-delay", "0.5", "--threads", "2",
                         service_mapping="fastdds") as launched:
         yield launched
 
@@ -50,6 +52,55 @@ def test_one_process_whose_threads_are_the_nodes(suite):
     for i in range(ENVS):
         for node in ("sim", "task_manager", "reward"):
             assert f"{node}-{i}" in threads, sorted(threads)
+
+
+def test_the_physics_runs_on_the_threads_asked_for(suite):
+    steppers = sorted(t for t in thread_names(suite.process.pid) if t.startswith("env-step-"))
+    assert steppers == ["env-step-0", "env-step-1"]
+
+
+def spin_for(agent: RclpyAgent, seconds: float) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        agent.executor.spin_once(timeout_sec=0.05)
+
+
+def last_episode_steps(seen: list[tuple[int, int]]) -> list[int]:
+    """The steps of the latest episode among (episode, step) pairs."""
+    latest = max((number for number, _ in seen), default=None)
+    return [step for number, step in seen if number == latest]
+
+
+def test_each_step_is_handed_over_once_in_the_process_and_still_goes_on_the_wire(suite):
+    from composuite_msgs.msg import StagedReward, WorldState
+    ns = NAMESPACES[1]
+    suite.wait_for_log(f"{ns}/reward up; world_state handed over in this process")
+    suite.wait_for_log(f"{ns}/task_manager up: task {TASK}, services in the fastdds format; "
+                       "world_state and observation handed over in this process")
+    agent = RclpyAgent(suite.domain)
+    worlds, rewards = [], []
+    try:
+        agent.node.create_subscription(WorldState, f"{ns}/world_state",
+                                       lambda m: worlds.append((m.episode, m.step)), 100)
+        agent.node.create_subscription(StagedReward, f"{ns}/reward",
+                                       lambda m: rewards.append((m.episode, m.step)), 100)
+        for topic in ("world_state", "reward"):
+            agent.spin_until(lambda: agent.node.count_publishers(f"{ns}/{topic}") > 0, 25.0,
+                             f"the {topic} writer")
+        # Each side sees the match on its own: give the suite's writers time to see ours.
+        spin_for(agent, 1.0)
+        steps = 20
+        with CompoSuiteRosEnv(TASK, ns) as env:
+            episode(env, 5, steps)
+        every_step = list(range(steps + 1))  # the reset state and each step
+        agent.spin_until(lambda: len(last_episode_steps(worlds)) >= len(every_step)
+                         and len(last_episode_steps(rewards)) >= len(every_step),
+                         10.0, "the episode's world states and rewards")
+        spin_for(agent, 0.5)  # a duplicate would come right after its original
+        assert sorted(last_episode_steps(worlds)) == every_step, "every world_state on the wire, once"
+        assert sorted(last_episode_steps(rewards)) == every_step, "the reward node scored each step once"
+    finally:
+        agent.close()
 
 
 def test_every_node_is_a_ros_node_in_the_graph(suite):

@@ -74,6 +74,11 @@ pub struct LaunchArgs {
     /// the other processes go on. Not with --isolate.
     #[arg(long, default_value_t = 1)]
     processes: usize,
+    /// Threads that step the composed environments' physics, shared by all of them: an
+    /// environment's reset or step waits for a free thread, never for the other environments
+    /// (each process of --processes has this many) [default: the available cores].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
     /// The environments this process holds, START..END of --envs (set by a launcher that
     /// splits them over --processes; not for users).
     #[arg(long, hide = true, value_name = "START..END")]
@@ -204,6 +209,20 @@ fn validate(args: &LaunchArgs) -> Result<(), String> {
         );
     }
     args.env_indices()?;
+    if args.threads == Some(0) {
+        return Err(
+            "--threads 0 is invalid; at least 1 thread steps the environments (leave it out \
+             for one per available core)"
+                .into(),
+        );
+    }
+    if args.threads.is_some() && !args.composed() {
+        return Err(
+            "--threads needs composed environments: --envs 2 or more, without --isolate (a \
+             node process steps its one environment on its own thread)"
+                .into(),
+        );
+    }
     if args.horizon == Some(0) {
         return Err("--horizon must be at least 1".into());
     }
@@ -454,7 +473,7 @@ impl Suite {
                 limit: args.respawn,
                 delay: Duration::from_secs_f64(args.respawn_delay),
             };
-            match Container::start(environments, policy) {
+            match Container::start(environments, policy, args.step_threads()) {
                 Ok(container) => suite.container = Some(container),
                 Err(e) => {
                     stop_all(&mut suite.nodes);
@@ -591,6 +610,13 @@ impl LaunchArgs {
         self.envs > 1 && !self.isolate
     }
 
+    /// Threads stepping the composed environments: `--threads`, or one per available core.
+    fn step_threads(&self) -> usize {
+        self.threads.unwrap_or_else(|| {
+            std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+        })
+    }
+
     /// The environments this process holds: `--env-range`, or all of them.
     fn env_indices(&self) -> Result<Range<usize>, String> {
         let Some(range) = &self.env_range else {
@@ -634,6 +660,7 @@ impl LaunchArgs {
         };
         option("--task", self.task.clone());
         option("--mode", self.mode.clone());
+        option("--threads", self.threads.map(|t| t.to_string()));
         option("--seed", self.seed.map(|s| s.to_string()));
         option("--horizon", self.horizon.map(|h| h.to_string()));
         option(
@@ -663,6 +690,7 @@ impl LaunchArgs {
             envs: 1,
             isolate: false,
             processes: 1,
+            threads: None,
             env_range: None,
             seed: None,
             horizon: None,
@@ -842,6 +870,8 @@ mod tests {
             "5",
             "--processes",
             "2",
+            "--threads",
+            "3",
             "--seed",
             "7",
             "--horizon",
@@ -869,6 +899,7 @@ mod tests {
             assert_eq!(child.env_indices(), Ok(range.clone()));
             assert!(child.composed() && child.processes == 1 && child.duration.is_none());
             assert_eq!((child.respawn, child.respawn_delay), (4, 0.25));
+            assert_eq!(child.step_threads(), 3);
             for index in range {
                 let namespace = env_namespace("/train", index, 5);
                 for kind in NodeKind::ALL {
@@ -897,5 +928,8 @@ mod tests {
         assert!(refused(&["--envs", "4", "--env-range", "2..9"]).contains("--env-range 2..9"));
         assert!(refused(&["--envs", "4", "--env-range", "x"]).contains("START..END"));
         assert!(validate(&parse(&["--envs", "4", "--processes", "4"])).is_ok());
+        assert!(refused(&["--envs", "4", "--threads", "0"]).contains("--threads 0 is invalid"));
+        assert!(validate(&parse(&["--envs", "4", "--threads", "1"])).is_ok());
+        assert!(refused(&["--envs", "4", "--isolate", "--threads", "2"]).contains("composed"));
     }
 }

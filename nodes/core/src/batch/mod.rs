@@ -25,8 +25,11 @@ use crate::env::{Action, Env, EnvConfig, EnvError};
 use crate::obs::{FLAT_SIZE_WITH_TASK, Observation, flat_size};
 use crate::rng::Mt19937;
 
+mod pool;
 #[cfg(test)]
 mod test;
+
+pub use pool::StepPool;
 
 /// Rows of stage values are this wide (the most stages any objective has), padded with 0.
 pub use crate::reward::MAX_STAGES;
@@ -196,11 +199,7 @@ impl Row {
 /// Environments (each its own task) and the thread pool that steps them.
 pub struct EnvBatch {
     envs: Vec<Env>,
-    /// The `threads − 1` helpers of the caller's thread, which steps environments too (`None`
-    /// with one thread). The caller works rather than waits: on a machine with as many cores
-    /// as threads, no core idles while a blocked caller and spinning workers share them.
-    pool: Option<rayon::ThreadPool>,
-    threads: usize,
+    pool: StepPool,
     /// Scratch, one per environment, reused every call.
     rows: Vec<Row>,
     observation_size: usize,
@@ -220,31 +219,18 @@ impl EnvBatch {
         if threads == 0 {
             return Err(BatchBuildError::NoThreads);
         }
-        let pool = if threads > 1 {
-            Some(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads - 1)
-                    .thread_name(|i| format!("composuite-env-{i}"))
-                    .build()
-                    .map_err(|e| BatchBuildError::ThreadPool(e.to_string()))?,
-            )
-        } else {
-            None
-        };
-        let build = |task: &TaskSpec| Env::new(*task, config.clone());
-        let envs: Vec<Env> = match &pool {
-            Some(pool) => pool.install(|| {
-                use rayon::prelude::*;
-                tasks.par_iter().map(build).collect()
-            }),
-            None => tasks.iter().map(build).collect(),
-        };
+        // The caller steps environments too: it is one of the threads.
+        let pool = StepPool::new(threads - 1)?;
+        let mut built: Vec<Option<Env>> = tasks.iter().map(|_| None).collect();
+        pool.for_each(&mut built, |index, env| {
+            *env = Some(Env::new(tasks[index], config.clone()));
+        });
+        let envs: Vec<Env> = built.into_iter().flatten().collect();
         let observation_size = flat_size(config.task_observation);
         Ok(EnvBatch {
             rows: vec![Row::default(); envs.len()],
             envs,
             pool,
-            threads,
             observation_size,
         })
     }
@@ -261,7 +247,7 @@ impl EnvBatch {
 
     /// Threads stepping the batch.
     pub fn threads(&self) -> usize {
-        self.threads
+        self.pool.workers() + 1
     }
 
     /// Values in one flat observation (93 with the task one-hots, 77 without).
@@ -331,15 +317,17 @@ impl EnvBatch {
         for (index, (env, command)) in self.envs.iter().zip(commands).enumerate() {
             precheck(env, command).map_err(|error| BatchError { index, error })?;
         }
-        let results: Vec<Result<(), EnvError>> = match &self.pool {
-            Some(pool) => step_shared(pool, self.threads, &mut self.envs, &mut self.rows, commands),
-            None => self
-                .envs
-                .iter_mut()
-                .zip(self.rows.iter_mut().zip(commands))
-                .map(|(env, (row, command))| carry_out(env, command, row))
-                .collect(),
-        };
+        let mut slots: Vec<Slot<'_>> = self
+            .envs
+            .iter_mut()
+            .zip(self.rows.iter_mut())
+            .map(|(env, row)| (env, row, Ok(())))
+            .collect();
+        self.pool.for_each(&mut slots, |index, (env, row, result)| {
+            *result = carry_out(env, &commands[index], row);
+        });
+        let results: Vec<Result<(), EnvError>> =
+            slots.into_iter().map(|(_, _, result)| result).collect();
         let written: Vec<usize> = (0..n)
             .filter(|&i| !matches!(commands[i], BatchCommand::Idle))
             .collect();
@@ -388,47 +376,6 @@ impl EnvBatch {
 
 /// One environment's share of a parallel call: the environment, its row, how its command went.
 type Slot<'a> = (&'a mut Env, &'a mut Row, Result<(), EnvError>);
-
-/// Carry out `commands` with the caller's thread and `threads − 1` workers of `pool` taking
-/// environments one at a time from a shared counter, so a slow environment holds only the
-/// thread stepping it and the others take the rest.
-fn step_shared(
-    pool: &rayon::ThreadPool,
-    threads: usize,
-    envs: &mut [Env],
-    rows: &mut [Row],
-    commands: &[BatchCommand],
-) -> Vec<Result<(), EnvError>> {
-    use std::sync::Mutex;
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    let next = AtomicUsize::new(0);
-    // Each environment is taken by exactly one thread (the counter hands out each index once);
-    // the locks are never contended, they only make the hand-over safe.
-    let slots: Vec<Mutex<Slot<'_>>> = envs
-        .iter_mut()
-        .zip(rows.iter_mut())
-        .map(|(env, row)| Mutex::new((env, row, Ok(()))))
-        .collect();
-    let work = || {
-        loop {
-            let i = next.fetch_add(1, Ordering::Relaxed);
-            let Some(slot) = slots.get(i) else { break };
-            let mut slot = slot.lock().expect("an environment's step panicked");
-            let (env, row, result) = &mut *slot;
-            *result = carry_out(env, &commands[i], row);
-        }
-    };
-    pool.in_place_scope(|scope| {
-        for _ in 1..threads {
-            scope.spawn(|_| work());
-        }
-        work();
-    });
-    slots
-        .into_iter()
-        .map(|slot| slot.into_inner().expect("an environment's step panicked").2)
-        .collect()
-}
 
 /// Whether `env` would refuse `command`: the same tests `Env` makes, made before any
 /// environment moves so a refused batch leaves every environment as it was.

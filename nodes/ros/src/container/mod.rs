@@ -7,6 +7,13 @@
 //! participant: a suite of N environments is one participant to DDS discovery, where N × 3
 //! processes were N × 3 participants that each tracked every other.
 //!
+//! They share two more things ([`Composition`]): the sims' physics (each environment's resets
+//! and steps) runs on one pool of `threads` threads, whichever environment asks — a queue, so
+//! an environment's step waits for a free thread, never for the other environments; and each
+//! environment's sim hands `world_state` and `observation` to its reward and task manager in
+//! the process ([`crate::shared::intra_process`]) while they still go on the wire for everyone
+//! else.
+//!
 //! A node that fails — panics, or returns an error — ends its environment only: the
 //! environment's other nodes are stopped, the failure is logged, and the environment starts
 //! again after a delay, at most `respawn` times (then the whole container stops with the
@@ -18,11 +25,14 @@ use std::sync::mpsc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use ros2_client::dds::Context;
+use std::sync::Arc;
+
+use composuite_core::batch::StepPool;
 
 use crate::nodes::NodeKind;
 use crate::shared::environment::RosEnvironment;
-use crate::shared::node::{RosNode, Startup, new_context};
+use crate::shared::intra_process::IntraProcess;
+use crate::shared::node::{Composition, RosNode, Startup, new_context};
 
 /// How long the nodes get to stop after they were told to.
 const GRACE: Duration = Duration::from_secs(5);
@@ -92,9 +102,9 @@ struct Environment {
     failed_at: Option<Instant>,
 }
 
-/// The container: the shared context, the environments and their node threads.
+/// The container: what its nodes share, the environments and their node threads.
 pub struct Container {
-    context: Context,
+    composition: Composition,
     environments: Vec<Environment>,
     ended_tx: mpsc::Sender<Ended>,
     ended_rx: mpsc::Receiver<Ended>,
@@ -103,17 +113,28 @@ pub struct Container {
 
 impl Container {
     /// Start every environment's nodes on one new participant (domain and discovery range from
-    /// the process environment, as for any node).
+    /// the process environment, as for any node), their physics stepped by `threads` threads.
     pub fn start(
         environments: Vec<EnvironmentLaunch>,
         policy: RespawnPolicy,
+        threads: usize,
     ) -> Result<Container, String> {
+        if threads == 0 {
+            return Err("the environments need at least 1 thread to step on".into());
+        }
+        // The nodes' threads hand their steps over and wait: the pool's workers are all the
+        // threads stepping.
+        let step_pool = StepPool::new(threads).map_err(|e| format!("--threads {threads}: {e}"))?;
         let ros_environment =
             RosEnvironment::read(|k| std::env::var(k).ok()).map_err(|e| e.to_string())?;
         let context = new_context(&ros_environment).map_err(|e| e.to_string())?;
         let (ended_tx, ended_rx) = mpsc::channel();
         let mut container = Container {
-            context,
+            composition: Composition {
+                context,
+                intra_process: Arc::new(IntraProcess::new()),
+                step_pool: Arc::new(step_pool),
+            },
             environments: environments
                 .into_iter()
                 .map(|launch| Environment {
@@ -152,14 +173,14 @@ impl Container {
         let mut nodes = Vec::new();
         for launch in &environment.launch.nodes {
             let (stop, stop_rx) = async_channel::bounded(1);
-            let context = self.context.clone();
+            let composition = self.composition.clone();
             let ended = self.ended_tx.clone();
             let kind = launch.kind;
             let argv = launch.argv.clone();
             let thread = std::thread::Builder::new()
                 .name(format!("{}-{env}", kind.name()))
                 .spawn(move || {
-                    let outcome = run_node(kind, &argv, &context, stop_rx);
+                    let outcome = run_node(kind, &argv, &composition, stop_rx);
                     let _ = ended.send(Ended {
                         env,
                         generation,
@@ -306,16 +327,16 @@ fn stop_nodes(nodes: Vec<NodeThread>) -> Vec<String> {
     late
 }
 
-/// Start node `kind` with `argv` on `context` and run it until `stop` delivers; a panic is
+/// Start node `kind` with `argv` in `composition` and run it until `stop` delivers; a panic is
 /// caught and reported like an error.
 fn run_node(
     kind: NodeKind,
     argv: &[String],
-    context: &Context,
+    composition: &Composition,
     stop: async_channel::Receiver<i32>,
 ) -> Outcome {
     let result = catch_unwind(AssertUnwindSafe(|| {
-        match RosNode::start_in(kind.spec(), argv, Some(context)) {
+        match RosNode::start_in(kind.spec(), argv, Some(composition)) {
             Ok(Startup::Node(node)) => node.run(kind.body(), stop),
             Ok(Startup::Help(_)) => Err("--help is not a node's argument here".into()),
             Err(e) => Err(format!("did not start: {e}")),

@@ -64,7 +64,15 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         shaping: node.param_bool("reward_shaping"),
         scale: node.param_f64("reward_scale"),
     });
-    log.info(format!("{} up", node.fully_qualified_name()));
+    log.info(format!(
+        "{} up{}",
+        node.fully_qualified_name(),
+        if world_sub.is_handed_over() {
+            "; world_state handed over in this process"
+        } else {
+            ""
+        }
+    ));
     // The task and episode the world states belong to.
     let mut current: Option<(TaskSpec, u32)> = None;
     // World states of an episode whose scene has not arrived yet (scene and world_state are

@@ -9,11 +9,13 @@
 //! - [`environment`]: `ROS_DOMAIN_ID` and the discovery range, which ros2-client does not read;
 //! - [`node`], [`params`] and [`param_server`]: start-up, parameters and their services,
 //!   logging, signals;
-//! - [`dds_log`]: RustDDS's log output, quietened where it reports expected events.
+//! - [`dds_log`]: RustDDS's log output, quietened where it reports expected events;
+//! - [`intra_process`]: messages handed over between the nodes of one composed process.
 
 pub mod convert;
 pub mod dds_log;
 pub mod environment;
+pub mod intra_process;
 pub mod names;
 pub mod node;
 pub mod param_server;

@@ -9,13 +9,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::{SystemTime, UNIX_EPOCH};
 
+use composuite_core::batch::StepPool;
 use composuite_msgs::{RosMessage, RosService};
 use ros2_client::action::ActionServerQosPolicies;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
-use ros2_client::dds::rustdds::Topic;
-use ros2_client::dds::{
-    ActionServer, Context, Node, NodeLoggingHandle, Publisher, Server, ServiceMapping, Subscription,
-};
+use ros2_client::dds::rustdds::{Topic, TopicDescription};
+use ros2_client::dds::{ActionServer, Context, Node, NodeLoggingHandle, Server, ServiceMapping};
 use ros2_client::log::LogLevel;
 use ros2_client::rosout::RosoutRaw;
 use ros2_client::{
@@ -25,6 +24,7 @@ use ros2_client::{
 
 use crate::shared::dds_log;
 use crate::shared::environment::{DiscoveryRange, RosEnvironment};
+use crate::shared::intra_process::{IntraProcess, Publisher, Subscription};
 use crate::shared::param_server::{ParameterServices, Parameters};
 use crate::shared::params::{self, ParamSpec};
 use crate::shared::ros_args::{self, RosArgs};
@@ -257,6 +257,18 @@ impl NodeSpec {
     }
 }
 
+/// What the nodes composed into one process share (`crate::container`): the DDS participant,
+/// the intra-process hand-off of their topics, and the threads that step their environments.
+#[derive(Clone)]
+pub struct Composition {
+    /// The one participant.
+    pub context: Context,
+    /// Messages between the process's nodes, handed over without DDS.
+    pub intra_process: Arc<IntraProcess>,
+    /// The threads the sims' physics runs on.
+    pub step_pool: Arc<StepPool>,
+}
+
 /// A running node: the ros2-client node, its logger, its parameters.
 pub struct RosNode {
     /// The ros2-client node (create entities through [`RosNode`]'s methods, which remap).
@@ -275,6 +287,11 @@ pub struct RosNode {
     pub parameters: Arc<Parameters>,
     /// The wire format of this node's services (`service_mapping` parameter).
     pub service_mapping: ServiceMapping,
+    /// The threads to step environments on: the process's when composed, else none (the
+    /// node's own thread steps).
+    pub step_pool: Arc<StepPool>,
+    /// The process's hand-off, when composed.
+    intra_process: Option<Arc<IntraProcess>>,
     parameter_services: Option<ParameterServices>,
     /// Whether the participant is this node's alone (so its end is the participant's).
     owns_participant: bool,
@@ -307,13 +324,13 @@ impl RosNode {
         Self::start_in(spec, argv, None)
     }
 
-    /// Start a node as [`RosNode::start`] does, on `shared`'s participant when given (many
-    /// nodes in one process, as ROS 2's composition puts them: one participant, so DDS
-    /// discovery does not grow with the square of the nodes), else on a participant of its own.
+    /// Start a node as [`RosNode::start`] does, in `shared` when given (many nodes in one
+    /// process, as ROS 2's composition puts them: one participant, so DDS discovery does not
+    /// grow with the square of the nodes), else on a participant of its own.
     pub fn start_in(
         spec: &NodeSpec,
         argv: &[String],
-        shared: Option<&Context>,
+        shared: Option<&Composition>,
     ) -> Result<Startup, StartError> {
         let args = ros_args::parse(argv).map_err(|e| StartError(e.to_string()))?;
         if args.other.iter().any(|a| a == "-h" || a == "--help") {
@@ -345,7 +362,7 @@ impl RosNode {
         };
 
         let context = match shared {
-            Some(context) => context.clone(),
+            Some(composition) => composition.context.clone(),
             None => new_context(&environment)?,
         };
 
@@ -382,6 +399,13 @@ impl RosNode {
             param_changes,
             parameters,
             service_mapping: mapping,
+            step_pool: match shared {
+                Some(composition) => Arc::clone(&composition.step_pool),
+                None => Arc::new(
+                    StepPool::new(0).map_err(|e| StartError(format!("no step pool: {e}")))?,
+                ),
+            },
+            intra_process: shared.map(|c| Arc::clone(&c.intra_process)),
             parameter_services: Some(parameter_services),
             owns_participant: shared.is_none(),
         })))
@@ -451,28 +475,47 @@ impl RosNode {
             .map_err(|e| StartError(format!("topic {name}: {e:?}")))
     }
 
-    /// A publisher of `T` on topic `name` (remaps applied, relative to the namespace).
-    pub fn publisher<T: RosMessage + Message>(
+    /// A publisher of `T` on topic `name` (remaps applied, relative to the namespace); in a
+    /// composed process it also hands its messages to the process's subscriptions of the topic
+    /// ([`crate::shared::intra_process`]).
+    pub fn publisher<T: RosMessage + Message + Clone + Send + 'static>(
         &mut self,
         name: &str,
         qos: QosProfile,
     ) -> Result<Publisher<T>, StartError> {
         let topic = self.topic::<T>(name, &qos)?;
-        self.node
-            .create_publisher(&topic, Some(qos))
-            .map_err(|e| StartError(format!("publisher {name}: {e:?}")))
+        let wire = self
+            .node
+            .create_publisher(&topic, Some(qos.clone()))
+            .map_err(|e| StartError(format!("publisher {name}: {e:?}")))?;
+        let topic_name = topic.name();
+        Ok(Publisher::new(
+            wire,
+            &topic_name,
+            &qos,
+            self.intra_process.as_deref(),
+        ))
     }
 
-    /// A subscription to `T` on topic `name` (remaps applied, relative to the namespace).
-    pub fn subscription<T: RosMessage + Message>(
+    /// A subscription to `T` on topic `name` (remaps applied, relative to the namespace); in a
+    /// composed process it also receives what the process's publishers of the topic hand over.
+    pub fn subscription<T: RosMessage + Message + Clone + Send + 'static>(
         &mut self,
         name: &str,
         qos: QosProfile,
     ) -> Result<Subscription<T>, StartError> {
         let topic = self.topic::<T>(name, &qos)?;
-        self.node
-            .create_subscription(&topic, Some(qos))
-            .map_err(|e| StartError(format!("subscription {name}: {e:?}")))
+        let wire = self
+            .node
+            .create_subscription(&topic, Some(qos.clone()))
+            .map_err(|e| StartError(format!("subscription {name}: {e:?}")))?;
+        let topic_name = topic.name();
+        Ok(Subscription::new(
+            wire,
+            &topic_name,
+            &qos,
+            self.intra_process.as_deref(),
+        ))
     }
 
     /// Service `name` (remaps applied) and the ROS type of `S`.

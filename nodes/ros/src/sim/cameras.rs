@@ -16,8 +16,8 @@ use composuite_msgs::geometry_msgs::msg::TransformStamped;
 use composuite_msgs::sensor_msgs::msg::{CameraInfo, Image, RegionOfInterest};
 use composuite_msgs::std_msgs::msg::Header;
 use ros2_client::ParameterValue;
-use ros2_client::dds::Publisher;
 
+use crate::shared::intra_process::Publisher;
 use crate::shared::names::WORLD_FRAME;
 use crate::shared::node::{RosNode, StartError};
 use crate::shared::qos;

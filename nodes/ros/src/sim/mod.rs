@@ -45,6 +45,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use composuite_core::TaskSpec;
+use composuite_core::batch::StepPool;
 use composuite_core::env::{Env, EnvConfig, EnvError};
 use composuite_core::physics::{ARM_DOF, RobotModel, robot_description, robot_model};
 use composuite_msgs::builtin_interfaces::msg::Time as BuiltinTime;
@@ -65,7 +66,7 @@ use futures::stream::FusedStream;
 use futures::{FutureExt, StreamExt};
 use ros2_client::action::{GoalId, GoalStatusEnum, SendGoalRequest};
 use ros2_client::action_msgs::CancelGoalRequest;
-use ros2_client::dds::{ActionServer, Publisher, Subscription};
+use ros2_client::dds::ActionServer;
 use ros2_client::{Gid, Message, ParameterValue, RmwRequestId};
 
 use self::action_server::Goals;
@@ -75,6 +76,7 @@ use self::controllers::running::{Controllers, End, Event};
 use self::controllers::{forward, trajectory};
 use self::hardware::{ArmCommand, GripperTarget, Hardware, JointSnapshot, SimHardware, read_env};
 use crate::shared::convert;
+use crate::shared::intra_process::{Publisher, Subscription};
 use crate::shared::names;
 use crate::shared::node::{Logger, ParamChange, RosNode};
 use crate::shared::param_server::Parameters;
@@ -298,10 +300,13 @@ struct Sim {
     steps_running: Option<simulation_services::StepsGoal>,
     /// The cameras whose images it publishes.
     cameras: cameras::Cameras,
+    /// Where its physics (resets and steps) runs: composed, the threads it shares with the
+    /// process's other sims; else its own thread.
+    step_pool: Arc<StepPool>,
 }
 
 /// A subscription's stream, or a stream that never yields when the topic is not offered.
-fn optional_stream<M: Message + 'static>(
+fn optional_stream<M: Message + Clone + Send + 'static>(
     subscription: Option<&Subscription<M>>,
 ) -> impl FusedStream<Item = ros2_client::ReadResult<(M, ros2_client::MessageInfo)>> + '_ {
     match subscription {
@@ -429,6 +434,7 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
         steps_goals: Goals::default(),
         steps_running: None,
         cameras,
+        step_pool: node.step_pool.clone(),
     };
     let log = node.log.clone();
     log.info(format!(
@@ -718,11 +724,17 @@ impl Sim {
             .map(|r| r.env)
             .filter(|env| env.task() == task && *env.config() == config);
         let robot_changed = reuse.is_none();
-        let mut env = reuse.unwrap_or_else(|| Env::new(task, config));
-        if let Err(err) = env.reset(scene.seed) {
-            log.error(format!("cannot start episode {}: {err}", scene.episode));
-            return;
-        }
+        let started = self.step_pool.run(|| {
+            let mut env = reuse.unwrap_or_else(|| Env::new(task, config));
+            env.reset(scene.seed).map(|_| env)
+        });
+        let env = match started {
+            Ok(env) => env,
+            Err(err) => {
+                log.error(format!("cannot start episode {}: {err}", scene.episode));
+                return;
+            }
+        };
         let controllers = Controllers::holding(env.world().arm_positions());
         self.run = Some(Running {
             env,
@@ -1240,9 +1252,11 @@ impl Sim {
         let (command, events) = run.controllers.update(&state, period_ns);
         let simulate = by == Advance::Command || run.controllers.running();
         let step = simulate.then(|| {
-            // The write's outcome is also in `last_step`, with the step's details.
-            let _ = hardware.write(&command);
-            hardware.last_step.take().expect("a write records its step")
+            self.step_pool.run(|| {
+                // The write's outcome is also in `last_step`, with the step's details.
+                let _ = hardware.write(&command);
+                hardware.last_step.take().expect("a write records its step")
+            })
         });
         let physics = started.elapsed();
         self.report(servers, events, log);

@@ -24,9 +24,10 @@ use composuite_msgs::srv;
 use futures::{FutureExt, StreamExt};
 use ros2_client::ParameterValue;
 use ros2_client::RmwRequestId;
-use ros2_client::dds::{Publisher, Server};
+use ros2_client::dds::Server;
 
 use crate::shared::convert;
+use crate::shared::intra_process::Publisher;
 use crate::shared::names;
 use crate::shared::node::{Logger, ParamChange, RosNode};
 use crate::shared::params::{ParamSpec, any_value, positive_number};
@@ -182,10 +183,15 @@ pub fn run(node: &mut RosNode, signals: async_channel::Receiver<i32>) -> Result<
     };
     let log = node.log.clone();
     log.info(format!(
-        "{} up: task {}, services in the {} format",
+        "{} up: task {}, services in the {} format{}",
         node.fully_qualified_name(),
         manager.task,
-        node.param_string("service_mapping")
+        node.param_string("service_mapping"),
+        if world_sub.is_handed_over() && observation_sub.is_handed_over() {
+            "; world_state and observation handed over in this process"
+        } else {
+            ""
+        }
     ));
     if let Err(err) = manager.start_episode(None) {
         log.error(format!("cannot start the first episode: {err}"));
