@@ -122,6 +122,18 @@ fn handed_over(qos: &QosProfile) -> bool {
         && matches!(qos.reliability, Reliability::Reliable { .. })
 }
 
+/// Topic `name` of `process` for an endpoint of `qos`: `None` outside a composed process or when
+/// the QoS keeps the endpoint on the wire alone.
+fn local_topic<M: Send + 'static>(
+    process: Option<&IntraProcess>,
+    name: &str,
+    qos: &QosProfile,
+) -> Option<Arc<LocalTopic<M>>> {
+    process
+        .filter(|_| handed_over(qos))
+        .and_then(|p| p.topic::<M>(name))
+}
+
 /// A publisher: the wire's, and the hand-off to this process's subscriptions of the topic.
 pub struct Publisher<M: Message> {
     wire: WirePublisher<M>,
@@ -137,9 +149,7 @@ impl<M: Message + Clone + Send + 'static> Publisher<M> {
         qos: &QosProfile,
         process: Option<&IntraProcess>,
     ) -> Publisher<M> {
-        let local = process
-            .filter(|_| handed_over(qos))
-            .and_then(|p| p.topic::<M>(name));
+        let local = local_topic::<M>(process, name, qos);
         if let Some(topic) = &local {
             topic.add_writer(wire.gid());
         }
@@ -195,17 +205,14 @@ impl<M: Message + Clone + Send + 'static> Subscription<M> {
         qos: &QosProfile,
         process: Option<&IntraProcess>,
     ) -> Subscription<M> {
-        let local = process
-            .filter(|_| handed_over(qos))
-            .and_then(|p| p.topic::<M>(name))
-            .map(|topic| {
-                let depth = match qos.history {
-                    History::KeepLast { depth } => Some(depth),
-                    History::KeepAll => None,
-                };
-                let queue = topic.subscribe(depth);
-                LocalEnd { topic, queue }
-            });
+        let local = local_topic::<M>(process, name, qos).map(|topic| {
+            let depth = match qos.history {
+                History::KeepLast { depth } => Some(depth),
+                History::KeepAll => None,
+            };
+            let queue = topic.subscribe(depth);
+            LocalEnd { topic, queue }
+        });
         Subscription { wire, local }
     }
 

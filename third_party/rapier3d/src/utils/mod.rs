@@ -21,6 +21,8 @@ mod rotation_ops;
 mod scalar_type;
 mod simd_real_copy;
 mod simd_select;
+#[cfg(feature = "alloc")]
+mod reused_vector;
 
 pub use component_mul::ComponentMul;
 pub use copysign::CopySign;
@@ -37,6 +39,8 @@ pub use rotation_ops::RotationOps;
 pub use scalar_type::ScalarType;
 pub use simd_real_copy::SimdRealCopy;
 pub use simd_select::SimdSelect;
+#[cfg(feature = "alloc")]
+pub(crate) use reused_vector::{copy_in_place, zero_in_place};
 
 #[cfg(not(target_arch = "spirv"))]
 pub use angular_inertia_ops::AngularInertiaOps;

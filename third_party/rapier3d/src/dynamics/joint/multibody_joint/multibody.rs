@@ -14,6 +14,7 @@ use crate::math::{
 use crate::prelude::MultibodyJoint;
 #[cfg(feature = "dim3")]
 use crate::utils::mat_to_na;
+use crate::utils::{copy_in_place, zero_in_place};
 use crate::utils::{AngularInertiaOps, CrossProduct, CrossProductMatrix, IndexMut2, vect_to_na};
 use na::{
     self, DMatrix, DVectorView, DVectorViewMut, Dyn, OMatrix, SMatrix, SVector, StorageMut,
@@ -258,14 +259,6 @@ struct EnergyGuardWorkspace {
     m_v: DVector,
 }
 
-/// `vector` as `len` zeros, in its own storage when the length is unchanged.
-fn zeroed(vector: &mut DVector, len: usize) {
-    if vector.len() == len {
-        vector.fill(0.0);
-    } else {
-        *vector = DVector::zeros(len);
-    }
-}
 impl Default for Multibody {
     fn default() -> Self {
         Multibody::new()
@@ -676,7 +669,7 @@ impl Multibody {
         // (gravity, user forces, spring position terms).
         let mut guard = core::mem::take(&mut self.guard);
         let pos_forces = &mut guard.pos_forces;
-        zeroed(
+        zero_in_place(
             pos_forces,
             if check_implicit_coriolis_divergence {
                 self.ndofs
@@ -786,8 +779,7 @@ impl Multibody {
         // Snapshot the full generalized forces: the energy guard may need them
         // for a re-solve with the plain mass matrix.
         if check_implicit_coriolis_divergence {
-            zeroed(&mut guard.gen_forces, self.accelerations.len());
-            guard.gen_forces.copy_from(&self.accelerations);
+            copy_in_place(&mut guard.gen_forces, &self.accelerations);
         }
 
         self.augmented_mass_indices
@@ -821,21 +813,17 @@ impl Multibody {
         // factorized matrices (no-op when there is no kinematic dof).
         // CompoSuite-ROS patch: copies into the guard's kept vectors, not clones; the products
         // below write into kept vectors too (`mul_to` runs the same `gemm` as `*`).
-        let copy = |to: &mut DVector, from: &DVector| {
-            zeroed(to, from.len());
-            to.copy_from(from);
-        };
-        copy(&mut guard.v, &self.velocities);
-        copy(&mut guard.f, gen_forces);
-        copy(&mut guard.f_pos, &guard.pos_forces);
+        copy_in_place(&mut guard.v, &self.velocities);
+        copy_in_place(&mut guard.f, gen_forces);
+        copy_in_place(&mut guard.f_pos, &guard.pos_forces);
         self.augmented_mass_indices
             .rearrange_rows(&mut guard.v, true);
         self.augmented_mass_indices
             .rearrange_rows(&mut guard.f, true);
         self.augmented_mass_indices
             .rearrange_rows(&mut guard.f_pos, true);
-        zeroed(&mut guard.m_a, eff_dim);
-        zeroed(&mut guard.m_v, eff_dim);
+        zero_in_place(&mut guard.m_a, eff_dim);
+        zero_in_place(&mut guard.m_v, eff_dim);
 
         let m = self.augmented_mass.view((0, 0), (eff_dim, eff_dim));
         let v = guard.v.rows(0, eff_dim);
@@ -844,7 +832,7 @@ impl Multibody {
         let (a_all, m_a, m_v) = (&mut guard.a, &mut guard.m_a, &mut guard.m_v);
 
         let mut energy_delta_minus_work = |accelerations: &DVector| -> Option<Real> {
-            copy(a_all, accelerations);
+            copy_in_place(a_all, accelerations);
             self.augmented_mass_indices.rearrange_rows(a_all, true);
             let a = a_all.rows(0, eff_dim);
             if !a.iter().all(|x| x.is_finite()) {

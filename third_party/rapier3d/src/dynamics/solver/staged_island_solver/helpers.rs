@@ -12,7 +12,6 @@ use crate::dynamics::solver::solver_contact_graph::SolverContactGraph;
 #[cfg(feature = "dim3")]
 use crate::dynamics::solver::velocity_solver::GyroParams;
 use crate::dynamics::{IntegrationParameters, MultibodyJointSet, RigidBodyHandle, RigidBodySet};
-use crate::math::DVector;
 use parry::math::SIMD_WIDTH;
 
 impl ContactConstraintsSet {
@@ -101,16 +100,8 @@ impl VelocitySolver {
         // CompoSuite-ROS patch: zeroed in place when the length is unchanged (the release
         // allocated both vectors anew every step).
         let generic_len = multibody_solver_id as usize;
-        for vels in [
-            &mut self.generic_solver_vels_increment,
-            &mut self.generic_solver_vels,
-        ] {
-            if vels.len() == generic_len {
-                vels.fill(0.0);
-            } else {
-                *vels = DVector::zeros(generic_len);
-            }
-        }
+        crate::utils::zero_in_place(&mut self.generic_solver_vels_increment, generic_len);
+        crate::utils::zero_in_place(&mut self.generic_solver_vels, generic_len);
 
         for link in &self.multibody_roots {
             let multibody = multibodies
