@@ -75,8 +75,9 @@ pub struct LaunchArgs {
     #[arg(long, default_value_t = 1)]
     processes: usize,
     /// Threads that step the composed environments' physics, shared by all of them: an
-    /// environment's reset or step waits for a free thread, never for the other environments
-    /// (each process of --processes has this many) [default: the available cores].
+    /// environment's reset or step waits for a free thread, never for the other environments;
+    /// one that finds no other running runs at once on its sim's own thread (each process of
+    /// --processes has this many) [default: the available cores].
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
     /// The environments this process holds, START..END of --envs (set by a launcher that

@@ -9,7 +9,10 @@
 //!   occupies one worker, never holds another environment's step, and no environment waits for
 //!   the others to be ready (a queue, not a barrier). However many environments a process
 //!   holds, their physics runs on its workers, so the cores are not shared out among dozens of
-//!   busy threads.
+//!   busy threads. One exception: a job handed over while no other job is running or waiting
+//!   runs at once on its caller's thread — an environment stepped alone skips the hand-over to
+//!   a worker and back (two thread wake-ups per step). So at most one job runs outside the
+//!   workers, and at most `workers + 1` at once.
 //!
 //! An environment's step does the same arithmetic on whichever thread runs it, so results do
 //! not depend on the number of threads.
@@ -24,6 +27,8 @@ pub struct StepPool {
     /// `None` without workers: callers then do their jobs themselves.
     workers: Option<rayon::ThreadPool>,
     worker_count: usize,
+    /// [`StepPool::run`] jobs running or waiting: a job that finds none runs on its caller.
+    in_flight: AtomicUsize,
 }
 
 impl StepPool {
@@ -43,6 +48,7 @@ impl StepPool {
         Ok(StepPool {
             workers: pool,
             worker_count: workers,
+            in_flight: AtomicUsize::new(0),
         })
     }
 
@@ -53,12 +59,19 @@ impl StepPool {
 
     /// Run `job` on a worker and return what it gives; the calling thread (outside the pool)
     /// waits for it. Jobs of many callers queue up and are taken oldest first by whichever
-    /// worker is free. Without workers the caller runs `job` itself. A panic in `job` is
-    /// raised again in the caller.
+    /// worker is free. A job that finds no other job running or waiting, and every job of a
+    /// pool without workers, runs on the calling thread instead. A panic in `job` is raised
+    /// again in the caller.
     pub fn run<R: Send>(&self, job: impl FnOnce() -> R + Send) -> R {
-        match &self.workers {
-            Some(workers) => workers.install(job),
-            None => job(),
+        let Some(workers) = &self.workers else {
+            return job();
+        };
+        // Counted until the job ends, also when it panics.
+        let _counted = InFlight::enter(&self.in_flight);
+        if _counted.first {
+            job()
+        } else {
+            workers.install(job)
         }
     }
 
@@ -92,6 +105,26 @@ impl StepPool {
             }
             take_items();
         });
+    }
+}
+
+/// One [`StepPool::run`] job counted in flight while this lives.
+struct InFlight<'a> {
+    count: &'a AtomicUsize,
+    /// No other job was running or waiting when this one came.
+    first: bool,
+}
+
+impl<'a> InFlight<'a> {
+    fn enter(count: &'a AtomicUsize) -> InFlight<'a> {
+        let first = count.fetch_add(1, Ordering::AcqRel) == 0;
+        InFlight { count, first }
+    }
+}
+
+impl Drop for InFlight<'_> {
+    fn drop(&mut self) {
+        self.count.fetch_sub(1, Ordering::AcqRel);
     }
 }
 
@@ -137,6 +170,54 @@ mod test {
     #[test]
     fn without_workers_the_caller_runs_its_job() {
         let pool = StepPool::new(0).unwrap();
+        let caller = std::thread::current().id();
+        assert_eq!(pool.run(|| std::thread::current().id()), caller);
+    }
+
+    // Stepped alone, an environment's job runs where it was asked for: no hand-over.
+    #[test]
+    fn a_job_that_finds_no_other_runs_on_its_callers_thread() {
+        let pool = StepPool::new(2).unwrap();
+        let caller = std::thread::current().id();
+        for _ in 0..3 {
+            assert_eq!(pool.run(|| std::thread::current().id()), caller);
+        }
+    }
+
+    // While one caller's job runs on its own thread, another caller's job goes to a worker.
+    #[test]
+    fn a_job_that_finds_another_running_goes_to_a_worker() {
+        let pool = StepPool::new(1).unwrap();
+        let (release, wait_for_release) = mpsc::channel::<()>();
+        let (started, wait_for_start) = mpsc::channel();
+        std::thread::scope(|s| {
+            let pool = &pool;
+            let first = s.spawn(move || {
+                let caller = std::thread::current().id();
+                pool.run(move || {
+                    started.send(()).unwrap();
+                    wait_for_release.recv_timeout(PATIENCE).unwrap();
+                    std::thread::current().id() == caller
+                })
+            });
+            wait_for_start.recv_timeout(PATIENCE).unwrap();
+            let second = pool.run(|| std::thread::current().name().map(str::to_string));
+            release.send(()).unwrap();
+            assert!(
+                first.join().unwrap(),
+                "the first job ran on its caller's thread"
+            );
+            assert_eq!(second.as_deref(), Some("env-step-0"));
+        });
+    }
+
+    // A job that panics is no longer counted: the next one again runs on its caller's thread.
+    #[test]
+    fn a_panicking_job_is_no_longer_counted() {
+        let pool = StepPool::new(1).unwrap();
+        let panicked =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| pool.run(|| panic!("boom"))));
+        assert!(panicked.is_err());
         let caller = std::thread::current().id();
         assert_eq!(pool.run(|| std::thread::current().id()), caller);
     }
