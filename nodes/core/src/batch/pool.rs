@@ -26,9 +26,19 @@ use super::BatchBuildError;
 pub struct StepPool {
     /// `None` without workers: callers then do their jobs themselves.
     workers: Option<rayon::ThreadPool>,
-    worker_count: usize,
     /// [`StepPool::run`] jobs running or waiting: a job that finds none runs on its caller.
     in_flight: AtomicUsize,
+}
+
+/// A pool without workers: every job runs on the thread that hands it over (a node that
+/// steps its one environment itself).
+impl Default for StepPool {
+    fn default() -> StepPool {
+        StepPool {
+            workers: None,
+            in_flight: AtomicUsize::new(0),
+        }
+    }
 }
 
 impl StepPool {
@@ -47,14 +57,15 @@ impl StepPool {
         };
         Ok(StepPool {
             workers: pool,
-            worker_count: workers,
             in_flight: AtomicUsize::new(0),
         })
     }
 
     /// Worker threads (callers not counted).
     pub fn workers(&self) -> usize {
-        self.worker_count
+        self.workers
+            .as_ref()
+            .map_or(0, rayon::ThreadPool::current_num_threads)
     }
 
     /// Run `job` on a worker and return what it gives; the calling thread (outside the pool)
@@ -67,8 +78,8 @@ impl StepPool {
             return job();
         };
         // Counted until the job ends, also when it panics.
-        let _counted = InFlight::enter(&self.in_flight);
-        if _counted.first {
+        let counted = InFlight::enter(&self.in_flight);
+        if counted.first {
             job()
         } else {
             workers.install(job)
@@ -100,7 +111,7 @@ impl StepPool {
             }
         };
         workers.in_place_scope(|scope| {
-            for _ in 0..self.worker_count {
+            for _ in 0..workers.current_num_threads() {
                 scope.spawn(|_| take_items());
             }
             take_items();
@@ -169,9 +180,11 @@ mod test {
 
     #[test]
     fn without_workers_the_caller_runs_its_job() {
-        let pool = StepPool::new(0).unwrap();
         let caller = std::thread::current().id();
-        assert_eq!(pool.run(|| std::thread::current().id()), caller);
+        for pool in [StepPool::new(0).unwrap(), StepPool::default()] {
+            assert_eq!(pool.workers(), 0);
+            assert_eq!(pool.run(|| std::thread::current().id()), caller);
+        }
     }
 
     // Stepped alone, an environment's job runs where it was asked for: no hand-over.

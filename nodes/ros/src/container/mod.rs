@@ -122,8 +122,8 @@ impl Container {
         if threads == 0 {
             return Err("the environments need at least 1 thread to step on".into());
         }
-        // The nodes' threads hand their steps over and wait: the pool's workers are all the
-        // threads stepping.
+        // The sims hand their steps to the pool's workers and wait (a step that finds no other
+        // running or waiting runs on its sim's own thread instead).
         let step_pool = StepPool::new(threads).map_err(|e| format!("--threads {threads}: {e}"))?;
         let ros_environment =
             RosEnvironment::read(|k| std::env::var(k).ok()).map_err(|e| e.to_string())?;

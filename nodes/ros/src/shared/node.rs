@@ -401,9 +401,7 @@ impl RosNode {
             service_mapping: mapping,
             step_pool: match shared {
                 Some(composition) => Arc::clone(&composition.step_pool),
-                None => Arc::new(
-                    StepPool::new(0).map_err(|e| StartError(format!("no step pool: {e}")))?,
-                ),
+                None => Arc::new(StepPool::default()),
             },
             intra_process: shared.map(|c| Arc::clone(&c.intra_process)),
             parameter_services: Some(parameter_services),
