@@ -90,31 +90,27 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
         })
     });
 
-    // Each joint's velocity Jacobian column at each body's centre of mass (the body's velocity
-    // per unit joint rate) and the body's angular momentum per unit joint rate, zero where the
-    // joint does not move the body: computed once, read by every pair of joints below.
-    let mut com_velocity = [[Vector3::<f64>::zeros(); MAX_BODIES]; ARM_DOF];
-    let mut spin_momentum = [[Vector3::<f64>::zeros(); MAX_BODIES]; ARM_DOF];
+    // M by momenta: a unit rate of joint j gives the bodies downstream of it a linear momentum
+    // `momentum[j]` and an angular momentum about the world origin `spin[j]`. For i ≤ j the
+    // bodies both joints move are those downstream of j, and the work term of M is
+    // Σ_b m_b·v_i(b)·v_j(b) + a_i·I_b·a_j with v_i(b) = a_i × (c_b − p_i), which is
+    // a_i · (spin[j] − p_i × momentum[j]): one pass over the bodies per joint, not per pair.
+    let mut momentum = [Vector3::<f64>::zeros(); ARM_DOF];
+    let mut spin = [Vector3::<f64>::zeros(); ARM_DOF];
     for (j, joint) in joints.iter().enumerate() {
         for &b in &arm.downstream[j] {
             if let Some(body) = &bodies[b] {
-                com_velocity[j][b] = joint.axis.cross(&(body.com - joint.anchor));
-                spin_momentum[j][b] = body.inertia * joint.axis;
+                let p = body.mass * joint.axis.cross(&(body.com - joint.anchor));
+                momentum[j] += p;
+                spin[j] += body.com.cross(&p) + body.inertia * joint.axis;
             }
         }
     }
-
-    // M: for i ≤ j, the bodies both joints move are those downstream of j.
     let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
     for j in 0..ARM_DOF {
         for i in 0..=j {
             let a_i = &joints[i];
-            let mut m = 0.0;
-            for &b in &arm.downstream[j] {
-                let Some(body) = &bodies[b] else { continue };
-                let (v_i, v_j) = (&com_velocity[i][b], &com_velocity[j][b]);
-                m += body.mass * v_i.dot(v_j) + a_i.axis.dot(&spin_momentum[j][b]);
-            }
+            let m = a_i.axis.dot(&(spin[j] - a_i.anchor.cross(&momentum[j])));
             mass_matrix[(i, j)] = m;
             mass_matrix[(j, i)] = m;
         }

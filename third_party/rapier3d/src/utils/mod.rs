@@ -415,3 +415,59 @@ pub mod serde {
         }
     }
 }
+
+/// CompoSuite-ROS patch: `a · b` summed exactly as nalgebra's `dot` sums a dynamically sized
+/// vector — eight running sums over each block of eight (`acc_k += a[i+k]·b[i+k]`), folded as
+/// `res += acc0 + acc4`, …, `res += acc3 + acc7` from `res = 0`, then the remaining entries one
+/// by one — with the eight sums held in two `f32x4`s (each lane runs its sum's scalar
+/// operations), so the result is the same bit for bit, in fewer instructions.
+#[inline(always)]
+pub(crate) fn dot_as_nalgebra(a: &[Real], b: &[Real]) -> Real {
+    use wide::f32x4;
+    debug_assert_eq!(a.len(), b.len(), "dot_as_nalgebra: lengths");
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let (mut low, mut high) = (f32x4::ZERO, f32x4::ZERO);
+    let mut i = 0;
+    while n - i >= 8 {
+        let x: &[Real; 8] = a[i..i + 8].try_into().unwrap();
+        let y: &[Real; 8] = b[i..i + 8].try_into().unwrap();
+        let half = |v: &[Real; 8], at: usize| f32x4::from([v[at], v[at + 1], v[at + 2], v[at + 3]]);
+        low = low + half(x, 0) * half(y, 0);
+        high = high + half(x, 4) * half(y, 4);
+        i += 8;
+    }
+    let folded = (low + high).to_array();
+    let mut res: Real = 0.0;
+    res += folded[0];
+    res += folded[1];
+    res += folded[2];
+    res += folded[3];
+    for k in i..n {
+        res += a[k] * b[k];
+    }
+    res
+}
+
+/// CompoSuite-ROS patch: `y = alpha·x + y` entry by entry, as nalgebra's `axpy(alpha, x, 1)`
+/// computes it (`alpha·x[i]·1 + 1·y[i]`, both unit products exact), four entries at a time:
+/// the same bit for bit.
+#[inline(always)]
+pub(crate) fn axpy_as_nalgebra(y: &mut [Real], alpha: Real, x: &[Real]) {
+    use wide::f32x4;
+    debug_assert_eq!(y.len(), x.len(), "axpy_as_nalgebra: lengths");
+    let n = y.len().min(x.len());
+    let (y, x) = (&mut y[..n], &x[..n]);
+    let scale = f32x4::splat(alpha);
+    let mut i = 0;
+    while n - i >= 4 {
+        let yi: &mut [Real; 4] = (&mut y[i..i + 4]).try_into().unwrap();
+        let xi: &[Real; 4] = x[i..i + 4].try_into().unwrap();
+        *yi = (scale * f32x4::from(*xi) + f32x4::from(*yi)).to_array();
+        i += 4;
+    }
+    for k in i..n {
+        y[k] = alpha * x[k] + y[k];
+    }
+}
+

@@ -52,8 +52,10 @@ fn concat_rb_mass_matrix(mass: Vector, inertia: Real) -> SMatrix<Real, SPATIAL_D
 /// CompoSuite-ROS patch: `y = alpha·a·b + beta·y` for a 3×3 `a` and 3-row `b`, `y`, computed
 /// exactly as nalgebra's `gemm` computes it for these shapes — column by column, each entry
 /// `(alpha·a[i,0])·b[0,j] + beta·y[i,j]`, then `+ (alpha·a[i,k])·b[k,j]` for k = 1, 2 (and
-/// without reading `y` when `beta` is 0) — so the results are the same bit for bit, without
+/// without using `y` when `beta` is 0) — so the results are the same bit for bit, without
 /// the generic per-column dispatch (the Coriolis terms run a dozen of these per link per step).
+/// A column's three entries run side by side in the lanes of an `f32x4`, each lane the scalar
+/// operations of its entry.
 #[cfg(feature = "dim3")]
 #[inline]
 fn gemm3<SY, SB>(
@@ -66,82 +68,159 @@ fn gemm3<SY, SB>(
     SY: StorageMut<Real, na::U3, Dyn>,
     SB: na::Storage<Real, na::U3, Dyn>,
 {
+    use wide::f32x4;
     assert_eq!(y.ncols(), b.ncols(), "gemm3: mismatched column counts");
     let scaled = a * alpha; // alpha·a[i,k] for every entry, as nalgebra forms them
+    // Column k of `scaled` in three lanes (the fourth is never stored): lane i then runs
+    // entry i's scalar operations, in their order.
+    let column = |k: usize| f32x4::from([scaled[(0, k)], scaled[(1, k)], scaled[(2, k)], 0.0]);
+    let (s0, s1, s2) = (column(0), column(1), column(2));
+    let beta4 = f32x4::splat(beta);
     for j in 0..b.ncols() {
-        let (b0, b1, b2) = (b[(0, j)], b[(1, j)], b[(2, j)]);
-        for i in 0..3 {
-            let first = scaled[(i, 0)] * b0;
-            let mut v = if beta == 0.0 {
-                first
-            } else {
-                first + beta * y[(i, j)]
-            };
-            v = scaled[(i, 1)] * b1 + v;
-            v = scaled[(i, 2)] * b2 + v;
-            y[(i, j)] = v;
+        // SAFETY: j < ncols of both (asserted above), and both have three rows by type.
+        let (b0, b1, b2, old) = unsafe {
+            (
+                *b.get_unchecked((0, j)),
+                *b.get_unchecked((1, j)),
+                *b.get_unchecked((2, j)),
+                [
+                    *y.get_unchecked((0, j)),
+                    *y.get_unchecked((1, j)),
+                    *y.get_unchecked((2, j)),
+                    0.0,
+                ],
+            )
+        };
+        let first = s0 * f32x4::splat(b0);
+        let mut v = if beta == 0.0 {
+            first
+        } else {
+            first + beta4 * f32x4::from(old)
+        };
+        v = s1 * f32x4::splat(b1) + v;
+        v = s2 * f32x4::splat(b2) + v;
+        let v = v.to_array();
+        for (i, value) in v.iter().take(3).enumerate() {
+            // SAFETY: as above.
+            unsafe { *y.get_unchecked_mut((i, j)) = *value };
         }
     }
 }
 
-/// CompoSuite-ROS patch: `y += aᵀ·b` for 6-row `a`, `b` (nalgebra's `gemm_tr(1, a, b, 1)`),
-/// each entry's 6-term dot product summed in nalgebra's order, so bit for bit the same.
+/// CompoSuite-ROS patch: one link's share of both mass matrices, in one pass.
+///
+/// The release added, per link, `Jᵀ·M·J` to the plain matrix and `Jᵀ·M'·J` to the semi-implicit
+/// one (nalgebra's `quadform`; `M'` has the gyroscopic derivative in its inertia block), then
+/// `Jᵀ·C` to the semi-implicit one (`gemm_tr`; `C` the link's Coriolis rows times `dt`). This
+/// computes every entry with the same operations in the same order — nalgebra's `gemv_tr` sums
+/// a 6-long dot product as `((((0 + p0) + p1) + p2) + p3) + p4) + p5` and adds it to the entry;
+/// `gemm_tr`'s dot is summed the same way — so the results are the same bit for bit. What it
+/// saves: the products by `M`'s zero blocks, the linear rows' partial sum (the same in `M` and
+/// `M'`), nalgebra's generic loops, and four entries of a column at once (`f32x4`: each lane
+/// runs the scalar operations, so the lanes are exact too). `rows` is a kept workspace holding
+/// `J` transposed, so the lanes of a column are contiguous.
 #[cfg(feature = "dim3")]
-#[inline]
-fn gemm_tr6_add<SY, SA, SB>(
-    y: &mut na::Matrix<Real, Dyn, Dyn, SY>,
-    a: &na::Matrix<Real, na::U6, Dyn, SA>,
-    b: &na::Matrix<Real, na::U6, Dyn, SB>,
-) where
-    SY: StorageMut<Real, Dyn, Dyn>,
-    SA: na::Storage<Real, na::U6, Dyn>,
-    SB: na::Storage<Real, na::U6, Dyn>,
-{
-    assert_eq!((y.nrows(), y.ncols()), (a.ncols(), b.ncols()), "gemm_tr6_add: shapes");
-    for j in 0..b.ncols() {
-        let bj = b.column(j);
-        for i in 0..a.ncols() {
-            let ai = a.column(i);
-            let mut dot: Real = 0.0;
-            for k in 0..6 {
-                dot += ai[k] * bj[k];
-            }
-            y[(i, j)] = dot + y[(i, j)];
-        }
-    }
-}
-
-/// CompoSuite-ROS patch: `out += Jᵀ·M·J` for a rigid body's spatial mass matrix `M` as
-/// [`concat_rb_mass_matrix`] builds it (a diagonal linear block, the inertia tensor, zero
-/// off-diagonal blocks), computed as nalgebra's `quadform(1, M, J, 1)` computes it but without
-/// the products by `M`'s zeros: column by column, `M·J[:, j]` summed in the order nalgebra's
-/// `gemv` sums it (the terms left out add exact zeros there), then `Jᵀ` times that by
-/// nalgebra's own `gemv_tr`. The result is the same bit for bit, for a third of the products.
-#[cfg(feature = "dim3")]
-fn add_rigid_body_quadform<S: na::StorageMut<Real, Dyn, Dyn>>(
-    out: &mut na::Matrix<Real, Dyn, Dyn, S>,
-    mass_matrix: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
-    jacobian: &na::MatrixView<Real, na::U6, Dyn, na::U1, na::U6>,
+#[allow(clippy::too_many_arguments)]
+fn add_link_mass_terms(
+    plain: &mut DMatrix<Real>,
+    semi_implicit: &mut DMatrix<Real>,
+    jacobian: &Jacobian<Real>,
+    coriolis_dt: &Jacobian<Real>,
+    width: usize,
+    plain_mass: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
+    semi_implicit_mass: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
+    rows: &mut Vec<Real>,
 ) {
-    let m = mass_matrix;
+    use wide::f32x4;
+    const LANES: usize = 4;
+    let (pm, am) = (plain_mass, semi_implicit_mass);
     debug_assert!(
-        (0..SPATIAL_DIM).all(|r| (0..SPATIAL_DIM).all(|c| {
+        [pm, am].iter().all(|m| (0..SPATIAL_DIM).all(|r| (0..SPATIAL_DIM).all(|c| {
             let linear_diagonal = r < DIM && c == r;
             let angular_block = r >= DIM && c >= DIM;
             linear_diagonal || angular_block || m[(r, c)] == 0.0
-        })),
-        "a rigid body's spatial mass matrix is block diagonal with a diagonal linear block"
+        }))) && (0..DIM).all(|r| pm[(r, r)] == am[(r, r)]),
+        "block-diagonal spatial mass matrices with one diagonal linear block"
     );
-    for j in 0..jacobian.ncols() {
+    if width == 0 {
+        return;
+    }
+    // Per column j of `J`: the linear rows of `M·J[:, j]` (the same in `M'`), the angular rows
+    // of `M·J[:, j]` and of `M'·J[:, j]`, and `C[:, j]` (what `gemm_tr` dots with).
+    const FACTORS: usize = 3 + 3 + 3 + SPATIAL_DIM;
+    let stride = width.div_ceil(LANES) * LANES;
+    let factors_at = SPATIAL_DIM * stride;
+    rows.clear();
+    rows.resize(factors_at + FACTORS * width, 0.0);
+    let (transposed, factors) = rows.split_at_mut(factors_at);
+    for c in 0..width {
+        for r in 0..SPATIAL_DIM {
+            transposed[r * stride + c] = jacobian[(r, c)];
+        }
+    }
+    for (j, f) in factors.chunks_exact_mut(FACTORS).enumerate() {
         let x = jacobian.column(j);
-        let mut work = SVector::<Real, SPATIAL_DIM>::zeros();
-        for r in 0..DIM {
-            work[r] = m[(r, r)] * x[r];
+        f[0] = pm[(0, 0)] * x[0];
+        f[1] = pm[(1, 1)] * x[1];
+        f[2] = pm[(2, 2)] * x[2];
+        for r in 3..SPATIAL_DIM {
+            f[r] = pm[(r, 3)] * x[3] + pm[(r, 4)] * x[4] + pm[(r, 5)] * x[5];
+            f[r + 3] = am[(r, 3)] * x[3] + am[(r, 4)] * x[4] + am[(r, 5)] * x[5];
         }
-        for r in DIM..SPATIAL_DIM {
-            work[r] = m[(r, 3)] * x[3] + m[(r, 4)] * x[4] + m[(r, 5)] * x[5];
+        f[9..].copy_from_slice(coriolis_dt.column(j).as_slice());
+    }
+    let n = plain.nrows();
+    let splat = f32x4::splat;
+    for c0 in (0..width).step_by(LANES) {
+        let jr: [f32x4; SPATIAL_DIM] = core::array::from_fn(|r| {
+            let at = r * stride + c0;
+            let four: [Real; LANES] = transposed[at..at + LANES].try_into().unwrap();
+            f32x4::from(four)
+        });
+        let count = LANES.min(width - c0);
+        for (j, f) in factors.chunks_exact(FACTORS).enumerate() {
+            let f: &[Real; FACTORS] = f.try_into().unwrap();
+            let mut lin = f32x4::ZERO + jr[0] * splat(f[0]);
+            lin = lin + jr[1] * splat(f[1]);
+            lin = lin + jr[2] * splat(f[2]);
+            let mut quad_plain = lin + jr[3] * splat(f[3]);
+            quad_plain = quad_plain + jr[4] * splat(f[4]);
+            quad_plain = quad_plain + jr[5] * splat(f[5]);
+            let mut quad_semi = lin + jr[3] * splat(f[6]);
+            quad_semi = quad_semi + jr[4] * splat(f[7]);
+            quad_semi = quad_semi + jr[5] * splat(f[8]);
+            let mut coriolis = f32x4::ZERO + jr[0] * splat(f[9]);
+            for r in 1..SPATIAL_DIM {
+                coriolis = coriolis + jr[r] * splat(f[9 + r]);
+            }
+            let at = j * n + c0;
+            add_lanes(&mut plain.as_mut_slice()[at..at + count], quad_plain, None);
+            add_lanes(
+                &mut semi_implicit.as_mut_slice()[at..at + count],
+                quad_semi,
+                Some(coriolis),
+            );
         }
-        out.column_mut(j).gemv_tr(1.0, jacobian, &work, 1.0);
+    }
+}
+
+/// CompoSuite-ROS patch: `out = then + (first + out)` lane by lane over `out`'s (at most four)
+/// entries (`out = first + out` without `then`).
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn add_lanes(out: &mut [Real], first: wide::f32x4, then: Option<wide::f32x4>) {
+    let sum = |old: wide::f32x4| match then {
+        Some(then) => then + (first + old),
+        None => first + old,
+    };
+    if let Ok(four) = <&mut [Real; 4]>::try_from(&mut *out) {
+        *four = sum(wide::f32x4::from(*four)).to_array();
+    } else {
+        let mut old = [0.0; 4];
+        old[..out.len()].copy_from_slice(out);
+        let new = sum(wide::f32x4::from(old)).to_array();
+        let count = out.len();
+        out.copy_from_slice(&new[..count]);
     }
 }
 
@@ -240,6 +319,8 @@ pub struct Multibody {
     /// CompoSuite-ROS patch: `M⁻¹·e_k` for every DoF k (column k), solved with
     /// `inv_augmented_mass` whenever it is refactorised (see `solve_unit_row`).
     inv_mass_columns: DMatrix<Real>,
+    /// CompoSuite-ROS patch: a link's body Jacobian transposed (`add_link_mass_terms`).
+    jacobian_rows: Vec<Real>,
     /// CompoSuite-ROS patch: the energy guard's vectors, kept between steps.
     guard: EnergyGuardWorkspace,
 }
@@ -297,6 +378,7 @@ impl Multibody {
             fk_inputs: Vec::new(),
             fk_inputs_now: Vec::new(),
             inv_mass_columns: DMatrix::zeros(0, 0),
+            jacobian_rows: Vec::new(),
             guard: EnergyGuardWorkspace::default(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
@@ -1006,6 +1088,7 @@ impl Multibody {
             let rb = &bodies[link.rigid_body];
             let rb_mass = rb.mprops.effective_mass();
             let rb_inertia = rb.mprops.effective_angular_inertia().into_matrix();
+            #[cfg(feature = "dim2")]
             let body_jacobian = self.body_jacobians[i].columns(0, width);
 
             // NOTE: the mass matrix index reordering operates on the assumption that the assembly
@@ -1045,19 +1128,7 @@ impl Multibody {
             let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
             #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
             let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
-            #[cfg(feature = "dim3")]
-            {
-                add_rigid_body_quadform(
-                    &mut self.augmented_mass.view_mut((0, 0), (width, width)),
-                    &rb_mass_matrix_wo_gyro,
-                    &body_jacobian,
-                );
-                add_rigid_body_quadform(
-                    &mut self.acc_augmented_mass.view_mut((0, 0), (width, width)),
-                    &rb_mass_matrix,
-                    &body_jacobian,
-                );
-            }
+            // (In 3D both products are added below, with the Coriolis rows: `add_link_mass_terms`.)
             #[cfg(feature = "dim2")]
             if width > 0 {
                 self.augmented_mass.view_mut((0, 0), (width, width)).quadform(
@@ -1207,10 +1278,16 @@ impl Multibody {
                 gemm3(&mut i_coriolis_dt_w, dt, &mat_to_na(rb_inertia), &coriolis_w, 0.0);
             }
 
-            gemm_tr6_add(
-                &mut self.acc_augmented_mass.view_mut((0, 0), (width, width)),
-                &rb_j,
-                &self.i_coriolis_dt.columns(0, width),
+            #[cfg(feature = "dim3")]
+            add_link_mass_terms(
+                &mut self.augmented_mass,
+                &mut self.acc_augmented_mass,
+                &self.body_jacobians[i],
+                &self.i_coriolis_dt,
+                width,
+                &rb_mass_matrix_wo_gyro,
+                &rb_mass_matrix,
+                &mut self.jacobian_rows,
             );
         }
 
