@@ -54,6 +54,33 @@ struct WorldBody {
     link: usize,
 }
 
+/// Sums over the bodies riding on a link (world frame), then over a link and those beyond it.
+#[derive(Clone, Copy, Default)]
+struct Composite {
+    mass: f64,
+    /// Σ m·c.
+    first_moment: Vector3<f64>,
+    /// Σ m·(|c|²·1 − c·cᵀ): the point masses' inertia about the world origin.
+    second_moment: Matrix3<f64>,
+    /// Σ of the bodies' own inertia tensors.
+    inertia: Matrix3<f64>,
+    /// Σ of the forces the bodies need (gravity and the velocity-product accelerations).
+    force: Vector3<f64>,
+    /// Σ (moment + c × force): their moments about the world origin.
+    torque: Vector3<f64>,
+}
+
+impl Composite {
+    fn add(&mut self, other: &Composite) {
+        self.mass += other.mass;
+        self.first_moment += other.first_moment;
+        self.second_moment += other.second_moment;
+        self.inertia += other.inertia;
+        self.force += other.force;
+        self.torque += other.torque;
+    }
+}
+
 /// M(q) and the bias torques of the arm in `arm`'s state. Runs every physics step, so it keeps
 /// its per-joint and per-body values on the stack.
 pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
@@ -77,6 +104,12 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
             link_of[b] = Some(j);
         }
     }
+    debug_assert!(
+        (1..ARM_DOF).all(|j| arm.downstream[j]
+            .iter()
+            .all(|b| arm.downstream[j - 1].contains(b))),
+        "each arm joint moves what the next one moves"
+    );
     let bodies: [Option<WorldBody>; MAX_BODIES] = std::array::from_fn(|b| {
         let link = link_of[b]?;
         let body = &model.bodies[b];
@@ -90,35 +123,8 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
         })
     });
 
-    // M by momenta: a unit rate of joint j gives the bodies downstream of it a linear momentum
-    // `momentum[j]` and an angular momentum about the world origin `spin[j]`. For i ≤ j the
-    // bodies both joints move are those downstream of j, and the work term of M is
-    // Σ_b m_b·v_i(b)·v_j(b) + a_i·I_b·a_j with v_i(b) = a_i × (c_b − p_i), which is
-    // a_i · (spin[j] − p_i × momentum[j]): one pass over the bodies per joint, not per pair.
-    let mut momentum = [Vector3::<f64>::zeros(); ARM_DOF];
-    let mut spin = [Vector3::<f64>::zeros(); ARM_DOF];
-    for (j, joint) in joints.iter().enumerate() {
-        for &b in &arm.downstream[j] {
-            if let Some(body) = &bodies[b] {
-                let p = body.mass * joint.axis.cross(&(body.com - joint.anchor));
-                momentum[j] += p;
-                spin[j] += body.com.cross(&p) + body.inertia * joint.axis;
-            }
-        }
-    }
-    let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
-    for j in 0..ARM_DOF {
-        for i in 0..=j {
-            let a_i = &joints[i];
-            let m = a_i.axis.dot(&(spin[j] - a_i.anchor.cross(&momentum[j])));
-            mass_matrix[(i, j)] = m;
-            mass_matrix[(j, i)] = m;
-        }
-        mass_matrix[(j, j)] += arm.armature[j];
-    }
-
-    // Bias: each link's motion with every joint acceleration zero (outward), then the wrench
-    // each body needs for it (and against gravity), summed about each joint (inward).
+    // Bias, outward: each link's motion with every joint acceleration zero; then the wrench
+    // each body needs for it (and against gravity).
     let mut omega = [Vector3::<f64>::zeros(); ARM_DOF];
     let mut alpha = [Vector3::<f64>::zeros(); ARM_DOF];
     let mut anchor_acc = [Vector3::<f64>::zeros(); ARM_DOF];
@@ -135,24 +141,62 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
         anchor_acc[j] = acc + a.cross(&d) + w.cross(&w.cross(&d));
     }
     let g = Vector3::new(0.0, 0.0, -arm.gravity);
-    let wrenches: [Option<(Vector3<f64>, Vector3<f64>)>; MAX_BODIES] = std::array::from_fn(|b| {
-        let body = bodies[b].as_ref()?;
+
+    // Composite bodies, inward: what joint j moves is every body riding on link j or beyond,
+    // so each sum below is taken per link, then accumulated from the hand towards the base.
+    let mut composite = [Composite::default(); ARM_DOF];
+    for body in bodies.iter().flatten() {
         let (w, a) = (omega[body.link], alpha[body.link]);
         let r = body.com - joints[body.link].anchor;
         let com_acc = anchor_acc[body.link] + a.cross(&r) + w.cross(&w.cross(&r));
         let force = body.mass * (com_acc - g);
         let moment = body.inertia * a + w.cross(&(body.inertia * w));
-        Some((force, moment))
-    });
-    let bias = std::array::from_fn(|j| {
-        let joint = &joints[j];
-        let mut torque = Vector3::zeros();
-        for &b in &arm.downstream[j] {
-            if let (Some(body), Some((force, moment))) = (&bodies[b], &wrenches[b]) {
-                torque += moment + (body.com - joint.anchor).cross(force);
-            }
+        let c = body.com;
+        let sum = &mut composite[body.link];
+        sum.mass += body.mass;
+        sum.first_moment += body.mass * c;
+        sum.second_moment +=
+            body.mass * (Matrix3::identity() * c.norm_squared() - c * c.transpose());
+        sum.inertia += body.inertia;
+        sum.force += force;
+        sum.torque += moment + c.cross(&force);
+    }
+    for j in (0..ARM_DOF - 1).rev() {
+        let outer = composite[j + 1];
+        composite[j].add(&outer);
+    }
+
+    // For a unit rate of joint j (axis a through p), the bodies it moves have the linear
+    // momentum Σ m·a × (c − p) = a × (Σ m·c − m·p) and the angular momentum about the world
+    // origin Σ m·c × (a × (c − p)) + I·a = (Σ m·(|c|²·1 − c·cᵀ) + Σ I)·a − (Σ m·c) × (a × p).
+    // For i ≤ j the bodies both joints move are those joint j moves, and
+    // M[i, j] = Σ m·v_i·v_j + a_i·I·a_j = a_i · (spin_j − p_i × momentum_j).
+    let mut momentum = [Vector3::<f64>::zeros(); ARM_DOF];
+    let mut spin = [Vector3::<f64>::zeros(); ARM_DOF];
+    for (j, joint) in joints.iter().enumerate() {
+        let sum = &composite[j];
+        let (a, p) = (&joint.axis, &joint.anchor);
+        momentum[j] = a.cross(&(sum.first_moment - sum.mass * p));
+        spin[j] = (sum.second_moment + sum.inertia) * a - sum.first_moment.cross(&a.cross(p));
+    }
+    let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
+    for j in 0..ARM_DOF {
+        for i in 0..=j {
+            let a_i = &joints[i];
+            let m = a_i.axis.dot(&(spin[j] - a_i.anchor.cross(&momentum[j])));
+            mass_matrix[(i, j)] = m;
+            mass_matrix[(j, i)] = m;
         }
-        joint.axis.dot(&torque)
+        mass_matrix[(j, j)] += arm.armature[j];
+    }
+
+    // Bias torque of joint j: the wrenches of the bodies it moves about its axis,
+    // a · Σ (moment + (c − p) × force) = a · (Σ (moment + c × force) − p × Σ force).
+    let bias = std::array::from_fn(|j| {
+        let (joint, sum) = (&joints[j], &composite[j]);
+        joint
+            .axis
+            .dot(&(sum.torque - joint.anchor.cross(&sum.force)))
     });
     ArmDynamics { mass_matrix, bias }
 }

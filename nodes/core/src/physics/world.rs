@@ -1103,4 +1103,115 @@ mod tests {
             }
         }
     }
+
+    /// `arm_dynamics` sums over composite bodies (a link and all beyond it); here M(q) and the
+    /// bias torques are summed body by body from their definitions — each joint's velocity
+    /// Jacobian column at each body, each body's wrench about each joint's axis — in random
+    /// configurations and joint velocities of every arm. Measured: they agree to ~1e-15 of
+    /// the largest entry.
+    #[test]
+    fn composite_body_dynamics_equal_the_body_by_body_sums() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        for robot in Robot::all() {
+            let mut world = SimWorld::new(robot, PhysicsParams::default());
+            let model = world.model;
+            for _ in 0..50 {
+                let q: [f64; ARM_DOF] = std::array::from_fn(|j| {
+                    let (lo, hi) = model.joints[j]
+                        .limits
+                        .unwrap_or((-std::f64::consts::PI, std::f64::consts::PI));
+                    rng.random_range(lo..=hi)
+                });
+                let qd: [f64; ARM_DOF] = std::array::from_fn(|_| rng.random_range(-2.0..2.0));
+                world.reset_arm(&q, FINGER_OPEN);
+                let poses: Vec<Isometry3<f64>> = world
+                    .arm
+                    .bodies
+                    .iter()
+                    .map(|&h| from_pose(world.physics.bodies[h].position()))
+                    .collect();
+                let fast = arm_dynamics(&ArmState {
+                    model,
+                    body_poses: &poses,
+                    downstream: &world.arm.downstream,
+                    armature: &world.gains.armature,
+                    velocities: &qd,
+                    gravity: world.params.gravity,
+                });
+
+                // Each joint's axis and anchor; each moving body's link, mass, com, inertia.
+                let axis: Vec<Vector3<f64>> = (0..ARM_DOF)
+                    .map(|j| poses[model.joints[j].child].rotation * model.joints[j].axis)
+                    .collect();
+                let anchor: Vec<Vector3<f64>> = (0..ARM_DOF)
+                    .map(|j| poses[model.joints[j].child].translation.vector)
+                    .collect();
+                let link_of = |b: usize| {
+                    (0..ARM_DOF)
+                        .rev()
+                        .find(|&j| world.arm.downstream[j].contains(&b))
+                };
+                let mut mass_matrix = nalgebra::SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
+                let mut bias = [0.0; ARM_DOF];
+                // Link motion with zero joint accelerations, outward.
+                let mut omega = [Vector3::zeros(); ARM_DOF];
+                let mut alpha = [Vector3::zeros(); ARM_DOF];
+                let mut anchor_acc = [Vector3::zeros(); ARM_DOF];
+                for j in 0..ARM_DOF {
+                    let spin = axis[j] * qd[j];
+                    if j > 0 {
+                        let d = anchor[j] - anchor[j - 1];
+                        let (w, a) = (omega[j - 1], alpha[j - 1]);
+                        omega[j] = w + spin;
+                        alpha[j] = a + w.cross(&spin);
+                        anchor_acc[j] = anchor_acc[j - 1] + a.cross(&d) + w.cross(&w.cross(&d));
+                    } else {
+                        omega[0] = spin;
+                    }
+                }
+                let g = Vector3::new(0.0, 0.0, -world.params.gravity);
+                for (b, pose) in poses.iter().enumerate() {
+                    let Some(link) = link_of(b) else { continue };
+                    let body = &model.bodies[b];
+                    let r = pose.rotation.to_rotation_matrix();
+                    let inertia = r.matrix() * body.inertia * r.matrix().transpose();
+                    let com = (pose * nalgebra::Point3::from(body.com)).coords;
+                    for j in 0..=link {
+                        for i in 0..=link {
+                            let v_i = axis[i].cross(&(com - anchor[i]));
+                            let v_j = axis[j].cross(&(com - anchor[j]));
+                            mass_matrix[(i, j)] +=
+                                body.mass * v_i.dot(&v_j) + axis[i].dot(&(inertia * axis[j]));
+                        }
+                    }
+                    let (w, a) = (omega[link], alpha[link]);
+                    let rc = com - anchor[link];
+                    let com_acc = anchor_acc[link] + a.cross(&rc) + w.cross(&w.cross(&rc));
+                    let force = body.mass * (com_acc - g);
+                    let moment = inertia * a + w.cross(&(inertia * w));
+                    for j in 0..=link {
+                        bias[j] += axis[j].dot(&(moment + (com - anchor[j]).cross(&force)));
+                    }
+                }
+                for j in 0..ARM_DOF {
+                    mass_matrix[(j, j)] += world.gains.armature[j];
+                }
+                let m_scale = mass_matrix.amax();
+                let m_error = (fast.mass_matrix - mass_matrix).amax();
+                assert!(
+                    m_error <= 1e-12 * m_scale,
+                    "{robot:?} q = {q:?}: M differs by {m_error:e} (largest entry {m_scale})"
+                );
+                let b_scale = bias.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                for j in 0..ARM_DOF {
+                    assert!(
+                        (fast.bias[j] - bias[j]).abs() <= 1e-12 * b_scale,
+                        "{robot:?} q = {q:?}, q̇ = {qd:?}: bias {j} is {} here, {} summed body by body",
+                        fast.bias[j],
+                        bias[j]
+                    );
+                }
+            }
+        }
+    }
 }

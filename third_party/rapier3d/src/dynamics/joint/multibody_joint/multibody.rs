@@ -117,8 +117,9 @@ fn gemm3<SY, SB>(
 /// `gemm_tr`'s dot is summed the same way — so the results are the same bit for bit. What it
 /// saves: the products by `M`'s zero blocks, the linear rows' partial sum (the same in `M` and
 /// `M'`), nalgebra's generic loops, and four entries of a column at once (`f32x4`: each lane
-/// runs the scalar operations, so the lanes are exact too). `rows` is a kept workspace holding
-/// `J` transposed, so the lanes of a column are contiguous.
+/// runs the scalar operations, so the lanes are exact too). `rows` and `factors` are kept
+/// workspaces: `J` transposed (the lanes of a column contiguous), and per column of `J` what
+/// its rows are multiplied by, already in four lanes.
 #[cfg(feature = "dim3")]
 #[allow(clippy::too_many_arguments)]
 fn add_link_mass_terms(
@@ -130,6 +131,7 @@ fn add_link_mass_terms(
     plain_mass: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
     semi_implicit_mass: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
     rows: &mut Vec<Real>,
+    factors: &mut Vec<wide::f32x4>,
 ) {
     use wide::f32x4;
     const LANES: usize = 4;
@@ -146,52 +148,66 @@ fn add_link_mass_terms(
         return;
     }
     // Per column j of `J`: the linear rows of `M·J[:, j]` (the same in `M'`), the angular rows
-    // of `M·J[:, j]` and of `M'·J[:, j]`, and `C[:, j]` (what `gemm_tr` dots with).
+    // of `M·J[:, j]` and of `M'·J[:, j]`, and `C[:, j]` (what `gemm_tr` dots with), each already
+    // in all four lanes.
     const FACTORS: usize = 3 + 3 + 3 + SPATIAL_DIM;
     let stride = width.div_ceil(LANES) * LANES;
-    let factors_at = SPATIAL_DIM * stride;
     rows.clear();
-    rows.resize(factors_at + FACTORS * width, 0.0);
-    let (transposed, factors) = rows.split_at_mut(factors_at);
+    rows.resize(SPATIAL_DIM * stride, 0.0);
     for c in 0..width {
+        let column = jacobian.fixed_view::<SPATIAL_DIM, 1>(0, c);
         for r in 0..SPATIAL_DIM {
-            transposed[r * stride + c] = jacobian[(r, c)];
+            rows[r * stride + c] = column[r];
         }
     }
-    for (j, f) in factors.chunks_exact_mut(FACTORS).enumerate() {
-        let x = jacobian.column(j);
-        f[0] = pm[(0, 0)] * x[0];
-        f[1] = pm[(1, 1)] * x[1];
-        f[2] = pm[(2, 2)] * x[2];
-        for r in 3..SPATIAL_DIM {
-            f[r] = pm[(r, 3)] * x[3] + pm[(r, 4)] * x[4] + pm[(r, 5)] * x[5];
-            f[r + 3] = am[(r, 3)] * x[3] + am[(r, 4)] * x[4] + am[(r, 5)] * x[5];
-        }
-        f[9..].copy_from_slice(coriolis_dt.column(j).as_slice());
+    factors.clear();
+    for j in 0..width {
+        let x = jacobian.fixed_view::<SPATIAL_DIM, 1>(0, j);
+        let c = coriolis_dt.fixed_view::<SPATIAL_DIM, 1>(0, j);
+        let angular = |m: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>, r: usize| {
+            m[(r, 3)] * x[3] + m[(r, 4)] * x[4] + m[(r, 5)] * x[5]
+        };
+        let column: [Real; FACTORS] = [
+            pm[(0, 0)] * x[0],
+            pm[(1, 1)] * x[1],
+            pm[(2, 2)] * x[2],
+            angular(pm, 3),
+            angular(pm, 4),
+            angular(pm, 5),
+            angular(am, 3),
+            angular(am, 4),
+            angular(am, 5),
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            c[4],
+            c[5],
+        ];
+        factors.extend(column.map(f32x4::splat));
     }
     let n = plain.nrows();
-    let splat = f32x4::splat;
     for c0 in (0..width).step_by(LANES) {
         let jr: [f32x4; SPATIAL_DIM] = core::array::from_fn(|r| {
             let at = r * stride + c0;
-            let four: [Real; LANES] = transposed[at..at + LANES].try_into().unwrap();
+            let four: [Real; LANES] = rows[at..at + LANES].try_into().unwrap();
             f32x4::from(four)
         });
         let count = LANES.min(width - c0);
         for (j, f) in factors.chunks_exact(FACTORS).enumerate() {
-            let f: &[Real; FACTORS] = f.try_into().unwrap();
-            let mut lin = f32x4::ZERO + jr[0] * splat(f[0]);
-            lin = lin + jr[1] * splat(f[1]);
-            lin = lin + jr[2] * splat(f[2]);
-            let mut quad_plain = lin + jr[3] * splat(f[3]);
-            quad_plain = quad_plain + jr[4] * splat(f[4]);
-            quad_plain = quad_plain + jr[5] * splat(f[5]);
-            let mut quad_semi = lin + jr[3] * splat(f[6]);
-            quad_semi = quad_semi + jr[4] * splat(f[7]);
-            quad_semi = quad_semi + jr[5] * splat(f[8]);
-            let mut coriolis = f32x4::ZERO + jr[0] * splat(f[9]);
+            let f: &[f32x4; FACTORS] = f.try_into().unwrap();
+            let mut lin = f32x4::ZERO + jr[0] * f[0];
+            lin = lin + jr[1] * f[1];
+            lin = lin + jr[2] * f[2];
+            let mut quad_plain = lin + jr[3] * f[3];
+            quad_plain = quad_plain + jr[4] * f[4];
+            quad_plain = quad_plain + jr[5] * f[5];
+            let mut quad_semi = lin + jr[3] * f[6];
+            quad_semi = quad_semi + jr[4] * f[7];
+            quad_semi = quad_semi + jr[5] * f[8];
+            let mut coriolis = f32x4::ZERO + jr[0] * f[9];
             for r in 1..SPATIAL_DIM {
-                coriolis = coriolis + jr[r] * splat(f[9 + r]);
+                coriolis = coriolis + jr[r] * f[9 + r];
             }
             let at = j * n + c0;
             add_lanes(&mut plain.as_mut_slice()[at..at + count], quad_plain, None);
@@ -321,6 +337,10 @@ pub struct Multibody {
     inv_mass_columns: DMatrix<Real>,
     /// CompoSuite-ROS patch: a link's body Jacobian transposed (`add_link_mass_terms`).
     jacobian_rows: Vec<Real>,
+    /// CompoSuite-ROS patch: per column of that Jacobian, the factors `add_link_mass_terms`
+    /// multiplies its rows by, in four lanes each.
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    jacobian_factors: Vec<wide::f32x4>,
     /// CompoSuite-ROS patch: the energy guard's vectors, kept between steps.
     guard: EnergyGuardWorkspace,
 }
@@ -379,6 +399,7 @@ impl Multibody {
             fk_inputs_now: Vec::new(),
             inv_mass_columns: DMatrix::zeros(0, 0),
             jacobian_rows: Vec::new(),
+            jacobian_factors: Vec::new(),
             guard: EnergyGuardWorkspace::default(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
@@ -1064,8 +1085,9 @@ impl Multibody {
             self.augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
             self.acc_augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
         } else {
-            self.augmented_mass.fill(0.0);
-            self.acc_augmented_mass.fill(0.0);
+            // CompoSuite-ROS patch: cleared as slices (a `memset`), not entry by entry.
+            self.augmented_mass.as_mut_slice().fill(0.0);
+            self.acc_augmented_mass.as_mut_slice().fill(0.0);
         }
 
         self.augmented_mass_indices.clear();
@@ -1164,8 +1186,13 @@ impl Multibody {
                 let (coriolis_v, parent_coriolis_v) = self.coriolis_v.index_mut2(i, parent_id);
                 let (coriolis_w, parent_coriolis_w) = self.coriolis_w.index_mut2(i, parent_id);
 
-                coriolis_v.copy_from(parent_coriolis_v);
-                coriolis_w.copy_from(parent_coriolis_w);
+                // CompoSuite-ROS patch: copied as slices (same shapes), not entry by entry.
+                coriolis_v
+                    .as_mut_slice()
+                    .copy_from_slice(parent_coriolis_v.as_slice());
+                coriolis_w
+                    .as_mut_slice()
+                    .copy_from_slice(parent_coriolis_w.as_slice());
                 // Only the parent's non-zero columns take part in the products below; the
                 // link's own DoF columns are added after them.
                 let mut coriolis_v = coriolis_v.columns_mut(0, parent_width);
@@ -1288,6 +1315,7 @@ impl Multibody {
                 &rb_mass_matrix_wo_gyro,
                 &rb_mass_matrix,
                 &mut self.jacobian_rows,
+                &mut self.jacobian_factors,
             );
         }
 
