@@ -58,18 +58,19 @@ fn concat_rb_mass_matrix(mass: Vector, inertia: Real) -> SMatrix<Real, SPATIAL_D
 /// operations of its entry.
 #[cfg(feature = "dim3")]
 #[inline]
-fn gemm3<SY, SB>(
-    y: &mut na::Matrix<Real, na::U3, Dyn, SY>,
+fn gemm3<RY: na::Dim, RB: na::Dim, SY, SB>(
+    y: &mut na::Matrix<Real, RY, Dyn, SY>,
     alpha: Real,
     a: &na::Matrix3<Real>,
-    b: &na::Matrix<Real, na::U3, Dyn, SB>,
+    b: &na::Matrix<Real, RB, Dyn, SB>,
     beta: Real,
 ) where
-    SY: StorageMut<Real, na::U3, Dyn>,
-    SB: na::Storage<Real, na::U3, Dyn>,
+    SY: StorageMut<Real, RY, Dyn>,
+    SB: na::Storage<Real, RB, Dyn>,
 {
     use wide::f32x4;
     assert_eq!(y.ncols(), b.ncols(), "gemm3: mismatched column counts");
+    assert!(y.nrows() == 3 && b.nrows() == 3, "gemm3: three rows");
     let scaled = a * alpha; // alpha·a[i,k] for every entry, as nalgebra forms them
     // Column k of `scaled` in three lanes (the fourth is never stored): lane i then runs
     // entry i's scalar operations, in their order.
@@ -77,7 +78,7 @@ fn gemm3<SY, SB>(
     let (s0, s1, s2) = (column(0), column(1), column(2));
     let beta4 = f32x4::splat(beta);
     for j in 0..b.ncols() {
-        // SAFETY: j < ncols of both (asserted above), and both have three rows by type.
+        // SAFETY: j < ncols of both, and both have three rows (asserted above).
         let (b0, b1, b2, old) = unsafe {
             (
                 *b.get_unchecked((0, j)),
@@ -1041,13 +1042,18 @@ impl Multibody {
 
                 let parent_width = self.nonzero_columns(parent_id);
                 let (link_j, parent_j) = self.body_jacobians.index_mut_const(i, parent_id);
-                link_j.copy_from(parent_j);
+                // CompoSuite-ROS patch: copied as a slice; the product below by `gemm3`, which
+                // computes what nalgebra's `gemm` does for these shapes, bit for bit.
+                link_j.as_mut_slice().copy_from_slice(parent_j.as_slice());
 
                 {
                     let mut link_j_v = link_j.view_mut((0, 0), (DIM, parent_width));
                     let parent_j_w = parent_j.view((DIM, 0), (ANG_DIM, parent_width));
 
                     let shift_tr = vect_to_na(link.shift02).gcross_matrix_tr();
+                    #[cfg(feature = "dim3")]
+                    gemm3(&mut link_j_v, 1.0, &shift_tr, &parent_j_w, 1.0);
+                    #[cfg(feature = "dim2")]
                     link_j_v.gemm(1.0, &shift_tr, &parent_j_w, 1.0);
                 }
             } else {
@@ -1070,6 +1076,9 @@ impl Multibody {
                 let (mut link_j_v, link_j_w) =
                     link_j.rows_range_pair_mut(0..DIM, DIM..DIM + ANG_DIM);
                 let shift_tr = vect_to_na(link.shift23).gcross_matrix_tr();
+                #[cfg(feature = "dim3")]
+                gemm3(&mut link_j_v, 1.0, &shift_tr, &link_j_w, 1.0);
+                #[cfg(feature = "dim2")]
                 link_j_v.gemm(1.0, &shift_tr, &link_j_w, 1.0);
             }
         }
