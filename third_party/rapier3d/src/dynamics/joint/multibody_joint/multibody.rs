@@ -155,16 +155,18 @@ fn add_link_mass_terms(
     let stride = width.div_ceil(LANES) * LANES;
     rows.clear();
     rows.resize(SPATIAL_DIM * stride, 0.0);
-    for c in 0..width {
-        let column = jacobian.fixed_view::<SPATIAL_DIM, 1>(0, c);
-        for r in 0..SPATIAL_DIM {
-            rows[r * stride + c] = column[r];
+    // Both are 6 × ndofs, column-major: column c is `[6c, 6c + 6)` of the slice.
+    let (jacobian, coriolis_dt) = (jacobian.as_slice(), coriolis_dt.as_slice());
+    for (r, row) in rows.chunks_exact_mut(stride).enumerate() {
+        for (c, value) in row[..width].iter_mut().enumerate() {
+            *value = jacobian[c * SPATIAL_DIM + r];
         }
     }
     factors.clear();
     for j in 0..width {
-        let x = jacobian.fixed_view::<SPATIAL_DIM, 1>(0, j);
-        let c = coriolis_dt.fixed_view::<SPATIAL_DIM, 1>(0, j);
+        let at = j * SPATIAL_DIM;
+        let x: &[Real; SPATIAL_DIM] = jacobian[at..at + SPATIAL_DIM].try_into().unwrap();
+        let c: &[Real; SPATIAL_DIM] = coriolis_dt[at..at + SPATIAL_DIM].try_into().unwrap();
         let angular = |m: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>, r: usize| {
             m[(r, 3)] * x[3] + m[(r, 4)] * x[4] + m[(r, 5)] * x[5]
         };
