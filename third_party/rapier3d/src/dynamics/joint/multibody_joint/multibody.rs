@@ -764,7 +764,7 @@ impl Multibody {
             return; // Nothing to do.
         }
 
-        self.accelerations.fill(0.0);
+        self.accelerations.as_mut_slice().fill(0.0); // CompoSuite-ROS patch: a memset
 
         // If there is significant movement, the semi-implicit coriolis term
         // occasionally cause instabilities due to the matrix being near singular.
@@ -838,9 +838,14 @@ impl Multibody {
                 rb.forces.force - rb_mass * acc.linvel,
                 rb.forces.torque - gyroscopic - rb_inertia * acc.angvel,
             );
-            self.accelerations.gemv_tr(
+            // CompoSuite-ROS patch: over the link's non-zero Jacobian columns only. A left-out
+            // entry would add nalgebra's dot of a zero column (`+0`, the forces being finite)
+            // to an acceleration that is never `-0` (it starts at `+0`, and a sum is `-0` only
+            // from two `-0`s), which leaves it as it is: bit for bit the same.
+            let width = self.nonzero_columns(i);
+            self.accelerations.rows_mut(0, width).gemv_tr(
                 1.0,
-                &self.body_jacobians[i],
+                &self.body_jacobians[i].columns(0, width),
                 external_forces.as_vector(),
                 1.0,
             );
@@ -1531,7 +1536,8 @@ impl Multibody {
             let q2 = self.links[c.link2].joint().coords()[c.axis2];
 
             // Jacobian J = e_{g2} − coeff·e_{g1}, then WJ = M⁻¹ J.
-            jacobians.rows_mut(j_id, ndofs * 2).fill(0.0);
+            // CompoSuite-ROS patch: cleared as a slice (a memset), not entry by entry.
+            jacobians.as_mut_slice()[j_id..j_id + ndofs * 2].fill(0.0);
             jacobians[j_id + g2] += 1.0;
             jacobians[j_id + g1] -= c.coeff;
             for k in 0..ndofs {

@@ -541,7 +541,8 @@ impl StagedIslandSolver {
         // rows are solved at (see `MultibodyJoint::velocity_constraints`).
         let only_active = self.groups.len() == 1 && self.groups[0].num_substeps == 1;
         let joints = &mut self.joint_constraints;
-        joints.generic_jacobians.fill(0.0);
+        // CompoSuite-ROS patch: cleared as a slice (a memset), not entry by entry.
+        joints.generic_jacobians.as_mut_slice().fill(0.0);
         joints.generic_velocity_constraints.clear();
         joints.generic_velocity_constraints_builder.clear();
         let mut j_id = 0;
