@@ -471,3 +471,38 @@ pub(crate) fn axpy_as_nalgebra(y: &mut [Real], alpha: Real, x: &[Real]) {
     }
 }
 
+
+/// CompoSuite-ROS patch: the exact helpers against nalgebra's `dot` and `axpy`, bit for bit.
+#[cfg(test)]
+mod exact_as_nalgebra_tests {
+    use super::{axpy_as_nalgebra, dot_as_nalgebra};
+    use crate::alloc_prelude::*;
+    use crate::math::Real;
+    use na::DVector;
+
+    #[test]
+    fn dot_and_axpy_equal_nalgebras_bit_for_bit() {
+        let mut state = 7u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0) as Real
+        };
+        for n in 0..27 {
+            let a = DVector::from_fn(n, |_, _| next());
+            let b = DVector::from_fn(n, |_, _| next());
+            assert_eq!(
+                dot_as_nalgebra(a.as_slice(), b.as_slice()).to_bits(),
+                a.dot(&b).to_bits(),
+                "dot, length {n}"
+            );
+            let alpha = next();
+            let (mut ours, mut theirs) = (b.clone(), b.clone());
+            axpy_as_nalgebra(ours.as_mut_slice(), alpha, a.as_slice());
+            theirs.axpy(alpha, &a, 1.0);
+            let bits = |v: &DVector<Real>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&ours), bits(&theirs), "axpy, length {n}");
+        }
+    }
+}

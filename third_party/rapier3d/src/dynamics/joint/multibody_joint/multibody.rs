@@ -2460,3 +2460,92 @@ mod test {
         );
     }
 }
+
+/// CompoSuite-ROS patch: the exact kernels against the nalgebra operations they replace, bit for
+/// bit, on random values and every width a 9-DoF tree has (and some more).
+#[cfg(all(test, feature = "dim3"))]
+mod exact_kernel_tests {
+    use super::{add_link_mass_terms, gemm3};
+    use crate::alloc_prelude::*;
+    use crate::math::{Jacobian, Real, SPATIAL_DIM};
+    use na::{DMatrix, Matrix3, SMatrix};
+
+    fn values(seed: u64, n: usize) -> Vec<Real> {
+        let mut state = seed;
+        (0..n)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0) as Real
+            })
+            .collect()
+    }
+
+    fn bits(m: &DMatrix<Real>) -> Vec<u32> {
+        m.iter().map(|x| x.to_bits()).collect()
+    }
+
+    #[test]
+    fn link_mass_terms_equal_nalgebras_quadform_and_gemm_tr_bit_for_bit() {
+        let mut rows = Vec::new();
+        let mut factors = Vec::new();
+        for (seed, ndofs, width) in [(1, 9, 1), (2, 9, 4), (3, 9, 5), (4, 9, 7), (5, 9, 9), (6, 13, 13)] {
+            let v = values(seed, 400);
+            let jacobian = Jacobian::<Real>::from_iterator(ndofs, v[..6 * ndofs].iter().copied());
+            let coriolis = Jacobian::<Real>::from_iterator(ndofs, v[100..100 + 6 * ndofs].iter().copied());
+            let inertia = Matrix3::from_iterator(v[200..209].iter().copied());
+            let gyro = Matrix3::from_iterator(v[210..219].iter().copied());
+            let mass = [v[220].abs(), v[220].abs(), v[220].abs()];
+            let block = |angular: Matrix3<Real>| {
+                let mut m = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
+                for r in 0..3 {
+                    m[(r, r)] = mass[r];
+                }
+                m.fixed_view_mut::<3, 3>(3, 3).copy_from(&angular);
+                m
+            };
+            let (plain_mass, semi_mass) = (block(inertia), block(inertia + gyro));
+            let start = DMatrix::from_iterator(ndofs, ndofs, v[230..230 + ndofs * ndofs].iter().copied());
+
+            // The release: two quadforms, then `gemm_tr`, on the leading width × width block.
+            let (mut plain_theirs, mut semi_theirs) = (start.clone(), start.clone());
+            let j = jacobian.columns(0, width);
+            plain_theirs.view_mut((0, 0), (width, width)).quadform(1.0, &plain_mass, &j, 1.0);
+            semi_theirs.view_mut((0, 0), (width, width)).quadform(1.0, &semi_mass, &j, 1.0);
+            semi_theirs
+                .view_mut((0, 0), (width, width))
+                .gemm_tr(1.0, &j, &coriolis.columns(0, width), 1.0);
+
+            let (mut plain_ours, mut semi_ours) = (start.clone(), start.clone());
+            add_link_mass_terms(
+                &mut plain_ours,
+                &mut semi_ours,
+                &jacobian,
+                &coriolis,
+                width,
+                &plain_mass,
+                &semi_mass,
+                &mut rows,
+                &mut factors,
+            );
+            assert_eq!(bits(&plain_ours), bits(&plain_theirs), "plain, width {width}");
+            assert_eq!(bits(&semi_ours), bits(&semi_theirs), "semi-implicit, width {width}");
+        }
+    }
+
+    #[test]
+    fn gemm3_equals_nalgebras_gemm_bit_for_bit() {
+        for (seed, width, beta) in [(1, 1, 1.0), (2, 9, 1.0), (3, 7, 0.0), (4, 5, -0.5)] {
+            let v = values(seed, 100);
+            let a = Matrix3::from_iterator(v[..9].iter().copied());
+            let b = na::Matrix3xX::<Real>::from_iterator(width, v[10..10 + 3 * width].iter().copied());
+            let y0 = na::Matrix3xX::<Real>::from_iterator(width, v[50..50 + 3 * width].iter().copied());
+            let (mut ours, mut theirs) = (y0.clone(), y0.clone());
+            gemm3(&mut ours, 0.75, &a, &b, beta);
+            theirs.gemm(0.75, &a, &b, beta);
+            let bits = |m: &na::Matrix3xX<Real>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&ours), bits(&theirs), "width {width}, beta {beta}");
+        }
+    }
+}
