@@ -108,6 +108,55 @@ fn gemm3<RY: na::Dim, RB: na::Dim, SY, SB>(
     }
 }
 
+/// CompoSuite-ROS patch: `gemm3(y, 1, a[0], b, 1)`, then `gemm3(y, 1, a[1], b, 1)`, … in one pass
+/// over the columns: each column of `b` is read and spread into lanes once, and each product is
+/// added to the entries in the order the separate calls add them (`alpha = 1` scales nothing,
+/// `beta = 1` neither), so the result is the same bit for bit.
+#[cfg(feature = "dim3")]
+#[inline]
+fn gemm3_sum<RY: na::Dim, RB: na::Dim, SY, SB, const K: usize>(
+    y: &mut na::Matrix<Real, RY, Dyn, SY>,
+    a: [&na::Matrix3<Real>; K],
+    b: &na::Matrix<Real, RB, Dyn, SB>,
+) where
+    SY: StorageMut<Real, RY, Dyn>,
+    SB: na::Storage<Real, RB, Dyn>,
+{
+    use wide::f32x4;
+    assert_eq!(y.ncols(), b.ncols(), "gemm3_sum: mismatched column counts");
+    assert!(y.nrows() == 3 && b.nrows() == 3, "gemm3_sum: three rows");
+    let columns: [[f32x4; 3]; K] = core::array::from_fn(|m| {
+        core::array::from_fn(|k| f32x4::from([a[m][(0, k)], a[m][(1, k)], a[m][(2, k)], 0.0]))
+    });
+    for j in 0..b.ncols() {
+        // SAFETY: j < ncols of both, and both have three rows (asserted above).
+        let (b0, b1, b2, old) = unsafe {
+            (
+                f32x4::splat(*b.get_unchecked((0, j))),
+                f32x4::splat(*b.get_unchecked((1, j))),
+                f32x4::splat(*b.get_unchecked((2, j))),
+                [
+                    *y.get_unchecked((0, j)),
+                    *y.get_unchecked((1, j)),
+                    *y.get_unchecked((2, j)),
+                    0.0,
+                ],
+            )
+        };
+        let mut v = f32x4::from(old);
+        for [s0, s1, s2] in &columns {
+            v = *s0 * b0 + v;
+            v = *s1 * b1 + v;
+            v = *s2 * b2 + v;
+        }
+        let v = v.to_array();
+        for (i, value) in v.iter().take(3).enumerate() {
+            // SAFETY: as above.
+            unsafe { *y.get_unchecked_mut((i, j)) = *value };
+        }
+    }
+}
+
 /// CompoSuite-ROS patch: one link's share of both mass matrices, in one pass.
 ///
 /// The release added, per link, `Jᵀ·M·J` to the plain matrix and `Jᵀ·M'·J` to the semi-implicit
@@ -1224,17 +1273,17 @@ impl Multibody {
                     rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
                 )
                 .gcross_matrix_tr();
-                gemm3(&mut coriolis_v, 1.0, &dvel_cross, &parent_j_w, 1.0);
-
-                // JDot/u * qdot
-                gemm3(
+                // JDot/u * qdot: the two products after it.
+                // CompoSuite-ROS patch: the three products by `parent_j_w` in one pass.
+                gemm3_sum(
                     &mut coriolis_v,
-                    1.0,
-                    &vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr(),
+                    [
+                        &dvel_cross,
+                        &vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr(),
+                        &(parent_w * shift_cross_tr),
+                    ],
                     &parent_j_w,
-                    1.0,
                 );
-                gemm3(&mut coriolis_v, 1.0, &(parent_w * shift_cross_tr), &parent_j_w, 1.0);
 
                 #[cfg(feature = "dim3")]
                 {
@@ -1281,15 +1330,15 @@ impl Multibody {
 
                 // JDot
                 let dvel_cross = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr();
-                gemm3(&mut coriolis_v, 1.0, &dvel_cross, &rb_j_w, 1.0);
-
-                // JDot/u * qdot
-                gemm3(
+                // JDot/u * qdot: the product after it.
+                // CompoSuite-ROS patch: both products by `rb_j_w` in one pass.
+                gemm3_sum(
                     &mut coriolis_v,
-                    1.0,
-                    &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr),
+                    [
+                        &dvel_cross,
+                        &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr),
+                    ],
                     &rb_j_w,
-                    1.0,
                 );
             }
 
@@ -2531,6 +2580,24 @@ mod exact_kernel_tests {
             );
             assert_eq!(bits(&plain_ours), bits(&plain_theirs), "plain, width {width}");
             assert_eq!(bits(&semi_ours), bits(&semi_theirs), "semi-implicit, width {width}");
+        }
+    }
+
+    #[test]
+    fn gemm3_sum_equals_consecutive_gemms_bit_for_bit() {
+        for (seed, width) in [(1, 1), (2, 9), (3, 6)] {
+            let v = values(seed, 200);
+            let a: [Matrix3<Real>; 3] =
+                core::array::from_fn(|m| Matrix3::from_iterator(v[9 * m..9 * m + 9].iter().copied()));
+            let b = na::Matrix3xX::<Real>::from_iterator(width, v[30..30 + 3 * width].iter().copied());
+            let y0 = na::Matrix3xX::<Real>::from_iterator(width, v[70..70 + 3 * width].iter().copied());
+            let (mut ours, mut theirs) = (y0.clone(), y0.clone());
+            super::gemm3_sum(&mut ours, [&a[0], &a[1], &a[2]], &b);
+            for m in &a {
+                theirs.gemm(1.0, m, &b, 1.0);
+            }
+            let bits = |m: &na::Matrix3xX<Real>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&ours), bits(&theirs), "width {width}");
         }
     }
 
