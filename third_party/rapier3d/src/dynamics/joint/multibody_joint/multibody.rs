@@ -1447,10 +1447,9 @@ impl Multibody {
             if self.inv_mass_columns.shape() != (n, n) {
                 self.inv_mass_columns = DMatrix::zeros(n, n);
             }
-            for k in 0..n {
-                let mut column = self.inv_mass_columns.column_mut(k);
-                self.inv_augmented_mass.solve_unit(k, &mut column);
-            }
+            // Four columns at a time (`solve_all_units`), each as `solve_unit` gives it.
+            self.inv_augmented_mass
+                .solve_all_units(&mut self.inv_mass_columns);
         } else {
             self.inv_mass_columns = DMatrix::zeros(0, 0);
         }

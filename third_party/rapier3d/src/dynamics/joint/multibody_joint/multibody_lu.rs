@@ -109,14 +109,7 @@ impl MultibodyLu {
     ) {
         let dim = self.lu.nrows();
         assert_eq!(dim, out.nrows(), "LU solve dimension mismatch.");
-        let mut first = k;
-        for &(i, pivot) in &self.swaps {
-            if first == i {
-                first = pivot;
-            } else if first == pivot {
-                first = i;
-            }
-        }
+        let first = self.unit_row(k);
         if dim > STACK_DIM {
             out.fill(0.0);
             out[k] = 1.0;
@@ -133,6 +126,75 @@ impl MultibodyLu {
 
     /// Solves in a copy of `b` (on the stack up to [`STACK_DIM`]) with contiguous slices, the
     /// forward substitution from row `first` of the permuted vector.
+    /// The row the row swaps move `e_k`'s 1 to.
+    fn unit_row(&self, k: usize) -> usize {
+        let mut row = k;
+        for &(i, pivot) in &self.swaps {
+            if row == i {
+                row = pivot;
+            } else if row == pivot {
+                row = i;
+            }
+        }
+        row
+    }
+
+    /// Every column of `M⁻¹` into `out` (dim × dim): column k is what [`Self::solve_unit`]
+    /// gives for k, bit for bit. Four columns are solved side by side in the lanes of an
+    /// `f32x4`, each lane running its column's substitutions in their order. A lane whose 1
+    /// sits lower than its neighbours' runs the forward steps above it too, but there its
+    /// entries are still `+0` or its 1, and adding `±0` to them changes nothing.
+    pub fn solve_all_units(&self, out: &mut DMatrix<Real>) {
+        use wide::f32x4;
+        let dim = self.lu.nrows();
+        assert_eq!(out.shape(), (dim, dim), "LU solve dimension mismatch.");
+        if dim > STACK_DIM {
+            for k in 0..dim {
+                self.solve_unit(k, &mut out.column_mut(k));
+            }
+            return;
+        }
+        let data = self.lu.as_slice();
+        for k0 in (0..dim).step_by(4) {
+            let lanes = 4.min(dim - k0);
+            let mut x = [[0.0 as Real; 4]; STACK_DIM];
+            let mut start = dim;
+            for lane in 0..lanes {
+                let row = self.unit_row(k0 + lane);
+                x[row][lane] = 1.0;
+                start = start.min(row);
+            }
+            let mut x: [f32x4; STACK_DIM] = x.map(f32x4::from);
+            let x = &mut x[..dim];
+            for i in start..dim.saturating_sub(1) {
+                let a = -x[i];
+                let column = &data[i * dim..(i + 1) * dim];
+                for r in i + 1..dim {
+                    x[r] = a * f32x4::splat(column[r]) + x[r];
+                }
+            }
+            for i in (0..dim).rev() {
+                let diag = data[i * dim + i];
+                if diag == 0.0 {
+                    break; // Singular: `substitute` stops here too.
+                }
+                let coeff = x[i] / f32x4::splat(diag);
+                x[i] = coeff;
+                let a = -coeff;
+                let column = &data[i * dim..i * dim + i];
+                for r in 0..i {
+                    x[r] = a * f32x4::splat(column[r]) + x[r];
+                }
+            }
+            for (r, value) in x.iter().enumerate() {
+                let value = value.to_array();
+                for lane in 0..lanes {
+                    out[(r, k0 + lane)] = value[lane];
+                }
+            }
+        }
+    }
+
     fn solve_from<S: StorageMut<Real, Dyn, U1>>(
         &self,
         b: &mut Matrix<Real, Dyn, U1, S>,
@@ -237,6 +299,8 @@ mod tests {
                 lu.solve_mut(&mut ours_x);
                 assert!(theirs.solve_mut(&mut theirs_x));
                 assert_eq!(ours_x.as_slice(), theirs_x.as_slice(), "dim {dim}");
+                let mut all = DMatrix::zeros(dim, dim);
+                lu.solve_all_units(&mut all);
                 for k in 0..dim {
                     let mut ours_e = DVector::zeros(dim);
                     lu.solve_unit(k, &mut ours_e);
@@ -245,6 +309,8 @@ mod tests {
                     assert!(theirs.solve_mut(&mut theirs_e));
                     let bits = |v: &DVector<Real>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                     assert_eq!(bits(&ours_e), bits(&theirs_e), "dim {dim}, column {k}");
+                    let column: DVector<Real> = all.column(k).into_owned();
+                    assert_eq!(bits(&column), bits(&theirs_e), "all units: dim {dim}, column {k}");
                 }
             }
         }
