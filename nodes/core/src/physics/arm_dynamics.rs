@@ -60,10 +60,8 @@ struct Composite {
     mass: f64,
     /// Σ m·c.
     first_moment: Vector3<f64>,
-    /// Σ m·(|c|²·1 − c·cᵀ): the point masses' inertia about the world origin.
-    second_moment: Matrix3<f64>,
-    /// Σ of the bodies' own inertia tensors.
-    inertia: Matrix3<f64>,
+    /// Σ (I + m·(|c|²·1 − c·cᵀ)): the bodies' inertia about the world origin.
+    origin_inertia: Matrix3<f64>,
     /// Σ of the forces the bodies need (gravity and the velocity-product accelerations).
     force: Vector3<f64>,
     /// Σ (moment + c × force): their moments about the world origin.
@@ -74,8 +72,7 @@ impl Composite {
     fn add(&mut self, other: &Composite) {
         self.mass += other.mass;
         self.first_moment += other.first_moment;
-        self.second_moment += other.second_moment;
-        self.inertia += other.inertia;
+        self.origin_inertia += other.origin_inertia;
         self.force += other.force;
         self.torque += other.torque;
     }
@@ -155,9 +152,8 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
         let sum = &mut composite[body.link];
         sum.mass += body.mass;
         sum.first_moment += body.mass * c;
-        sum.second_moment +=
-            body.mass * (Matrix3::identity() * c.norm_squared() - c * c.transpose());
-        sum.inertia += body.inertia;
+        sum.origin_inertia +=
+            body.inertia + body.mass * (Matrix3::identity() * c.norm_squared() - c * c.transpose());
         sum.force += force;
         sum.torque += moment + c.cross(&force);
     }
@@ -168,7 +164,7 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
 
     // For a unit rate of joint j (axis a through p), the bodies it moves have the linear
     // momentum Σ m·a × (c − p) = a × (Σ m·c − m·p) and the angular momentum about the world
-    // origin Σ m·c × (a × (c − p)) + I·a = (Σ m·(|c|²·1 − c·cᵀ) + Σ I)·a − (Σ m·c) × (a × p).
+    // origin Σ m·c × (a × (c − p)) + I·a = Σ (I + m·(|c|²·1 − c·cᵀ))·a − (Σ m·c) × (a × p).
     // For i ≤ j the bodies both joints move are those joint j moves, and
     // M[i, j] = Σ m·v_i·v_j + a_i·I·a_j = a_i · (spin_j − p_i × momentum_j).
     let mut momentum = [Vector3::<f64>::zeros(); ARM_DOF];
@@ -177,7 +173,7 @@ pub fn arm_dynamics(arm: &ArmState) -> ArmDynamics {
         let sum = &composite[j];
         let (a, p) = (&joint.axis, &joint.anchor);
         momentum[j] = a.cross(&(sum.first_moment - sum.mass * p));
-        spin[j] = (sum.second_moment + sum.inertia) * a - sum.first_moment.cross(&a.cross(p));
+        spin[j] = sum.origin_inertia * a - sum.first_moment.cross(&a.cross(p));
     }
     let mut mass_matrix = SMatrix::<f64, ARM_DOF, ARM_DOF>::zeros();
     for j in 0..ARM_DOF {

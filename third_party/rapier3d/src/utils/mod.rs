@@ -471,33 +471,41 @@ pub(crate) fn axpy_as_nalgebra(y: &mut [Real], alpha: Real, x: &[Real]) {
     }
 }
 
+/// CompoSuite-ROS patch: `n` reproducible values in [-1, 1) (a linear congruential sequence
+/// from `seed`), the inputs of the exact kernels' bit-for-bit tests.
+#[cfg(test)]
+pub(crate) fn test_values(seed: u64, n: usize) -> crate::alloc_prelude::Vec<Real> {
+    let mut state = seed;
+    (0..n)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0) as Real
+        })
+        .collect()
+}
 
 /// CompoSuite-ROS patch: the exact helpers against nalgebra's `dot` and `axpy`, bit for bit.
 #[cfg(test)]
 mod exact_as_nalgebra_tests {
-    use super::{axpy_as_nalgebra, dot_as_nalgebra};
+    use super::{axpy_as_nalgebra, dot_as_nalgebra, test_values};
     use crate::alloc_prelude::*;
     use crate::math::Real;
     use na::DVector;
 
     #[test]
     fn dot_and_axpy_equal_nalgebras_bit_for_bit() {
-        let mut state = 7u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0) as Real
-        };
         for n in 0..27 {
-            let a = DVector::from_fn(n, |_, _| next());
-            let b = DVector::from_fn(n, |_, _| next());
+            let v = test_values(n as u64 + 7, 2 * n + 1);
+            let a = DVector::from_column_slice(&v[..n]);
+            let b = DVector::from_column_slice(&v[n..2 * n]);
             assert_eq!(
                 dot_as_nalgebra(a.as_slice(), b.as_slice()).to_bits(),
                 a.dot(&b).to_bits(),
                 "dot, length {n}"
             );
-            let alpha = next();
+            let alpha = v[2 * n];
             let (mut ours, mut theirs) = (b.clone(), b.clone());
             axpy_as_nalgebra(ours.as_mut_slice(), alpha, a.as_slice());
             theirs.axpy(alpha, &a, 1.0);

@@ -49,6 +49,50 @@ fn concat_rb_mass_matrix(mass: Vector, inertia: Real) -> SMatrix<Real, SPATIAL_D
     result
 }
 
+/// CompoSuite-ROS patch: `y[:, j] = f(b[:, j], y[:, j])` for every column j of the 3-row `y`
+/// and `b`, the entries of a column in the first three lanes of `f32x4`s (the fourth is never
+/// stored): what `gemm3` and `gemm3_sum` share.
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn map_columns3<RY: na::Dim, RB: na::Dim, SY, SB>(
+    y: &mut na::Matrix<Real, RY, Dyn, SY>,
+    b: &na::Matrix<Real, RB, Dyn, SB>,
+    mut f: impl FnMut([Real; 3], wide::f32x4) -> wide::f32x4,
+) where
+    SY: StorageMut<Real, RY, Dyn>,
+    SB: na::Storage<Real, RB, Dyn>,
+{
+    assert_eq!(y.ncols(), b.ncols(), "mismatched column counts");
+    assert!(y.nrows() == 3 && b.nrows() == 3, "three rows");
+    for j in 0..b.ncols() {
+        // SAFETY: j < ncols of both, and both have three rows (asserted above).
+        let (column, old) = unsafe {
+            (
+                [0, 1, 2].map(|i| *b.get_unchecked((i, j))),
+                [
+                    *y.get_unchecked((0, j)),
+                    *y.get_unchecked((1, j)),
+                    *y.get_unchecked((2, j)),
+                    0.0,
+                ],
+            )
+        };
+        let new = f(column, wide::f32x4::from(old)).to_array();
+        for (i, value) in new.iter().take(3).enumerate() {
+            // SAFETY: as above.
+            unsafe { *y.get_unchecked_mut((i, j)) = *value };
+        }
+    }
+}
+
+/// CompoSuite-ROS patch: the columns of a 3 × 3 matrix in the first three lanes of `f32x4`s:
+/// lane i then runs entry i's scalar operations.
+#[cfg(feature = "dim3")]
+#[inline(always)]
+fn lane_columns(a: &na::Matrix3<Real>) -> [wide::f32x4; 3] {
+    core::array::from_fn(|k| wide::f32x4::from([a[(0, k)], a[(1, k)], a[(2, k)], 0.0]))
+}
+
 /// CompoSuite-ROS patch: `y = alpha·a·b + beta·y` for a 3×3 `a` and 3-row `b`, `y`, computed
 /// exactly as nalgebra's `gemm` computes it for these shapes — column by column, each entry
 /// `(alpha·a[i,0])·b[0,j] + beta·y[i,j]`, then `+ (alpha·a[i,k])·b[k,j]` for k = 1, 2 (and
@@ -69,43 +113,19 @@ fn gemm3<RY: na::Dim, RB: na::Dim, SY, SB>(
     SB: na::Storage<Real, RB, Dyn>,
 {
     use wide::f32x4;
-    assert_eq!(y.ncols(), b.ncols(), "gemm3: mismatched column counts");
-    assert!(y.nrows() == 3 && b.nrows() == 3, "gemm3: three rows");
-    let scaled = a * alpha; // alpha·a[i,k] for every entry, as nalgebra forms them
-    // Column k of `scaled` in three lanes (the fourth is never stored): lane i then runs
-    // entry i's scalar operations, in their order.
-    let column = |k: usize| f32x4::from([scaled[(0, k)], scaled[(1, k)], scaled[(2, k)], 0.0]);
-    let (s0, s1, s2) = (column(0), column(1), column(2));
+    // alpha·a[i,k] for every entry, as nalgebra forms them.
+    let [s0, s1, s2] = lane_columns(&(a * alpha));
     let beta4 = f32x4::splat(beta);
-    for j in 0..b.ncols() {
-        // SAFETY: j < ncols of both, and both have three rows (asserted above).
-        let (b0, b1, b2, old) = unsafe {
-            (
-                *b.get_unchecked((0, j)),
-                *b.get_unchecked((1, j)),
-                *b.get_unchecked((2, j)),
-                [
-                    *y.get_unchecked((0, j)),
-                    *y.get_unchecked((1, j)),
-                    *y.get_unchecked((2, j)),
-                    0.0,
-                ],
-            )
-        };
+    map_columns3(y, b, |[b0, b1, b2], old| {
         let first = s0 * f32x4::splat(b0);
         let mut v = if beta == 0.0 {
             first
         } else {
-            first + beta4 * f32x4::from(old)
+            first + beta4 * old
         };
         v = s1 * f32x4::splat(b1) + v;
-        v = s2 * f32x4::splat(b2) + v;
-        let v = v.to_array();
-        for (i, value) in v.iter().take(3).enumerate() {
-            // SAFETY: as above.
-            unsafe { *y.get_unchecked_mut((i, j)) = *value };
-        }
-    }
+        s2 * f32x4::splat(b2) + v
+    });
 }
 
 /// CompoSuite-ROS patch: `gemm3(y, 1, a[0], b, 1)`, then `gemm3(y, 1, a[1], b, 1)`, … in one pass
@@ -123,38 +143,16 @@ fn gemm3_sum<RY: na::Dim, RB: na::Dim, SY, SB, const K: usize>(
     SB: na::Storage<Real, RB, Dyn>,
 {
     use wide::f32x4;
-    assert_eq!(y.ncols(), b.ncols(), "gemm3_sum: mismatched column counts");
-    assert!(y.nrows() == 3 && b.nrows() == 3, "gemm3_sum: three rows");
-    let columns: [[f32x4; 3]; K] = core::array::from_fn(|m| {
-        core::array::from_fn(|k| f32x4::from([a[m][(0, k)], a[m][(1, k)], a[m][(2, k)], 0.0]))
-    });
-    for j in 0..b.ncols() {
-        // SAFETY: j < ncols of both, and both have three rows (asserted above).
-        let (b0, b1, b2, old) = unsafe {
-            (
-                f32x4::splat(*b.get_unchecked((0, j))),
-                f32x4::splat(*b.get_unchecked((1, j))),
-                f32x4::splat(*b.get_unchecked((2, j))),
-                [
-                    *y.get_unchecked((0, j)),
-                    *y.get_unchecked((1, j)),
-                    *y.get_unchecked((2, j)),
-                    0.0,
-                ],
-            )
-        };
-        let mut v = f32x4::from(old);
+    let columns = a.map(lane_columns);
+    map_columns3(y, b, |column, mut v| {
+        let [b0, b1, b2] = column.map(f32x4::splat);
         for [s0, s1, s2] in &columns {
             v = *s0 * b0 + v;
             v = *s1 * b1 + v;
             v = *s2 * b2 + v;
         }
-        let v = v.to_array();
-        for (i, value) in v.iter().take(3).enumerate() {
-            // SAFETY: as above.
-            unsafe { *y.get_unchecked_mut((i, j)) = *value };
-        }
-    }
+        v
+    });
 }
 
 /// CompoSuite-ROS patch: one link's share of both mass matrices, in one pass.
@@ -187,11 +185,14 @@ fn add_link_mass_terms(
     const LANES: usize = 4;
     let (pm, am) = (plain_mass, semi_implicit_mass);
     debug_assert!(
-        [pm, am].iter().all(|m| (0..SPATIAL_DIM).all(|r| (0..SPATIAL_DIM).all(|c| {
-            let linear_diagonal = r < DIM && c == r;
-            let angular_block = r >= DIM && c >= DIM;
-            linear_diagonal || angular_block || m[(r, c)] == 0.0
-        }))) && (0..DIM).all(|r| pm[(r, r)] == am[(r, r)]),
+        [pm, am]
+            .iter()
+            .all(|m| (0..SPATIAL_DIM).all(|r| (0..SPATIAL_DIM).all(|c| {
+                let linear_diagonal = r < DIM && c == r;
+                let angular_block = r >= DIM && c >= DIM;
+                linear_diagonal || angular_block || m[(r, c)] == 0.0
+            })))
+            && (0..DIM).all(|r| pm[(r, r)] == am[(r, r)]),
         "block-diagonal spatial mass matrices with one diagonal linear block"
     );
     if width == 0 {
@@ -1336,7 +1337,8 @@ impl Multibody {
                     &mut coriolis_v,
                     [
                         &dvel_cross,
-                        &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr),
+                        &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix()
+                            * shift_cross_tr),
                     ],
                     &rb_j_w,
                 );
@@ -2516,19 +2518,8 @@ mod exact_kernel_tests {
     use super::{add_link_mass_terms, gemm3};
     use crate::alloc_prelude::*;
     use crate::math::{Jacobian, Real, SPATIAL_DIM};
+    use crate::utils::test_values as values;
     use na::{DMatrix, Matrix3, SMatrix};
-
-    fn values(seed: u64, n: usize) -> Vec<Real> {
-        let mut state = seed;
-        (0..n)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0) as Real
-            })
-            .collect()
-    }
 
     fn bits(m: &DMatrix<Real>) -> Vec<u32> {
         m.iter().map(|x| x.to_bits()).collect()
@@ -2538,10 +2529,18 @@ mod exact_kernel_tests {
     fn link_mass_terms_equal_nalgebras_quadform_and_gemm_tr_bit_for_bit() {
         let mut rows = Vec::new();
         let mut factors = Vec::new();
-        for (seed, ndofs, width) in [(1, 9, 1), (2, 9, 4), (3, 9, 5), (4, 9, 7), (5, 9, 9), (6, 13, 13)] {
+        for (seed, ndofs, width) in [
+            (1, 9, 1),
+            (2, 9, 4),
+            (3, 9, 5),
+            (4, 9, 7),
+            (5, 9, 9),
+            (6, 13, 13),
+        ] {
             let v = values(seed, 400);
             let jacobian = Jacobian::<Real>::from_iterator(ndofs, v[..6 * ndofs].iter().copied());
-            let coriolis = Jacobian::<Real>::from_iterator(ndofs, v[100..100 + 6 * ndofs].iter().copied());
+            let coriolis =
+                Jacobian::<Real>::from_iterator(ndofs, v[100..100 + 6 * ndofs].iter().copied());
             let inertia = Matrix3::from_iterator(v[200..209].iter().copied());
             let gyro = Matrix3::from_iterator(v[210..219].iter().copied());
             let mass = [v[220].abs(), v[220].abs(), v[220].abs()];
@@ -2554,16 +2553,24 @@ mod exact_kernel_tests {
                 m
             };
             let (plain_mass, semi_mass) = (block(inertia), block(inertia + gyro));
-            let start = DMatrix::from_iterator(ndofs, ndofs, v[230..230 + ndofs * ndofs].iter().copied());
+            let start =
+                DMatrix::from_iterator(ndofs, ndofs, v[230..230 + ndofs * ndofs].iter().copied());
 
             // The release: two quadforms, then `gemm_tr`, on the leading width × width block.
             let (mut plain_theirs, mut semi_theirs) = (start.clone(), start.clone());
             let j = jacobian.columns(0, width);
-            plain_theirs.view_mut((0, 0), (width, width)).quadform(1.0, &plain_mass, &j, 1.0);
-            semi_theirs.view_mut((0, 0), (width, width)).quadform(1.0, &semi_mass, &j, 1.0);
+            plain_theirs
+                .view_mut((0, 0), (width, width))
+                .quadform(1.0, &plain_mass, &j, 1.0);
             semi_theirs
                 .view_mut((0, 0), (width, width))
-                .gemm_tr(1.0, &j, &coriolis.columns(0, width), 1.0);
+                .quadform(1.0, &semi_mass, &j, 1.0);
+            semi_theirs.view_mut((0, 0), (width, width)).gemm_tr(
+                1.0,
+                &j,
+                &coriolis.columns(0, width),
+                1.0,
+            );
 
             let (mut plain_ours, mut semi_ours) = (start.clone(), start.clone());
             add_link_mass_terms(
@@ -2577,8 +2584,16 @@ mod exact_kernel_tests {
                 &mut rows,
                 &mut factors,
             );
-            assert_eq!(bits(&plain_ours), bits(&plain_theirs), "plain, width {width}");
-            assert_eq!(bits(&semi_ours), bits(&semi_theirs), "semi-implicit, width {width}");
+            assert_eq!(
+                bits(&plain_ours),
+                bits(&plain_theirs),
+                "plain, width {width}"
+            );
+            assert_eq!(
+                bits(&semi_ours),
+                bits(&semi_theirs),
+                "semi-implicit, width {width}"
+            );
         }
     }
 
@@ -2586,10 +2601,13 @@ mod exact_kernel_tests {
     fn gemm3_sum_equals_consecutive_gemms_bit_for_bit() {
         for (seed, width) in [(1, 1), (2, 9), (3, 6)] {
             let v = values(seed, 200);
-            let a: [Matrix3<Real>; 3] =
-                core::array::from_fn(|m| Matrix3::from_iterator(v[9 * m..9 * m + 9].iter().copied()));
-            let b = na::Matrix3xX::<Real>::from_iterator(width, v[30..30 + 3 * width].iter().copied());
-            let y0 = na::Matrix3xX::<Real>::from_iterator(width, v[70..70 + 3 * width].iter().copied());
+            let a: [Matrix3<Real>; 3] = core::array::from_fn(|m| {
+                Matrix3::from_iterator(v[9 * m..9 * m + 9].iter().copied())
+            });
+            let b =
+                na::Matrix3xX::<Real>::from_iterator(width, v[30..30 + 3 * width].iter().copied());
+            let y0 =
+                na::Matrix3xX::<Real>::from_iterator(width, v[70..70 + 3 * width].iter().copied());
             let (mut ours, mut theirs) = (y0.clone(), y0.clone());
             super::gemm3_sum(&mut ours, [&a[0], &a[1], &a[2]], &b);
             for m in &a {
@@ -2605,8 +2623,10 @@ mod exact_kernel_tests {
         for (seed, width, beta) in [(1, 1, 1.0), (2, 9, 1.0), (3, 7, 0.0), (4, 5, -0.5)] {
             let v = values(seed, 100);
             let a = Matrix3::from_iterator(v[..9].iter().copied());
-            let b = na::Matrix3xX::<Real>::from_iterator(width, v[10..10 + 3 * width].iter().copied());
-            let y0 = na::Matrix3xX::<Real>::from_iterator(width, v[50..50 + 3 * width].iter().copied());
+            let b =
+                na::Matrix3xX::<Real>::from_iterator(width, v[10..10 + 3 * width].iter().copied());
+            let y0 =
+                na::Matrix3xX::<Real>::from_iterator(width, v[50..50 + 3 * width].iter().copied());
             let (mut ours, mut theirs) = (y0.clone(), y0.clone());
             gemm3(&mut ours, 0.75, &a, &b, beta);
             theirs.gemm(0.75, &a, &b, beta);

@@ -124,8 +124,6 @@ impl MultibodyLu {
         }
     }
 
-    /// Solves in a copy of `b` (on the stack up to [`STACK_DIM`]) with contiguous slices, the
-    /// forward substitution from row `first` of the permuted vector.
     /// The row the row swaps move `e_k`'s 1 to.
     fn unit_row(&self, k: usize) -> usize {
         let mut row = k;
@@ -195,6 +193,8 @@ impl MultibodyLu {
         }
     }
 
+    /// Solves in a copy of `b` (on the stack up to [`STACK_DIM`]) with contiguous slices, the
+    /// forward substitution from row `first` of the permuted vector.
     fn solve_from<S: StorageMut<Real, Dyn, U1>>(
         &self,
         b: &mut Matrix<Real, Dyn, U1, S>,
@@ -269,21 +269,10 @@ mod tests {
     use super::MultibodyLu;
     use crate::alloc_prelude::*;
     use crate::math::Real;
+    use crate::utils::test_values as values;
     use na::{DMatrix, DVector};
 
     /// A fixed pseudo-random stream, so the test needs no dependency.
-    fn values(seed: u64, n: usize) -> Vec<Real> {
-        let mut state = seed;
-        (0..n)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0) as Real
-            })
-            .collect()
-    }
-
     #[test]
     fn factors_and_solutions_equal_nalgebras_bit_for_bit() {
         let mut lu = MultibodyLu::default();
@@ -310,7 +299,11 @@ mod tests {
                     let bits = |v: &DVector<Real>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                     assert_eq!(bits(&ours_e), bits(&theirs_e), "dim {dim}, column {k}");
                     let column: DVector<Real> = all.column(k).into_owned();
-                    assert_eq!(bits(&column), bits(&theirs_e), "all units: dim {dim}, column {k}");
+                    assert_eq!(
+                        bits(&column),
+                        bits(&theirs_e),
+                        "all units: dim {dim}, column {k}"
+                    );
                 }
             }
         }

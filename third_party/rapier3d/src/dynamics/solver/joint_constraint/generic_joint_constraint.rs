@@ -349,7 +349,11 @@ impl GenericJointConstraint {
         let delta_impulse = total_impulse - self.impulse;
         self.impulse = total_impulse;
 
-        let step = if SIDE == 1 { delta_impulse } else { -delta_impulse };
+        let step = if SIDE == 1 {
+            delta_impulse
+        } else {
+            -delta_impulse
+        };
         axpy_as_nalgebra(vels, step, &jacobians[wj_id..wj_id + n]);
     }
 
