@@ -285,11 +285,17 @@ fn add_lanes(out: &mut [Real], first: wide::f32x4, then: Option<wide::f32x4>) {
     if let Ok(four) = <&mut [Real; 4]>::try_from(&mut *out) {
         *four = sum(wide::f32x4::from(*four)).to_array();
     } else {
-        let mut old = [0.0; 4];
-        old[..out.len()].copy_from_slice(out);
-        let new = sum(wide::f32x4::from(old)).to_array();
-        let count = out.len();
-        out.copy_from_slice(&new[..count]);
+        // The 1-3 entries of a last column group, one by one with the lanes' own operations: a
+        // vector load of a short copy on the stack would stall on store forwarding.
+        let first = first.to_array();
+        let then = then.map(|then| then.to_array());
+        for (i, entry) in out.iter_mut().enumerate() {
+            let partial = first[i] + *entry;
+            *entry = match then {
+                Some(then) => then[i] + partial,
+                None => partial,
+            };
+        }
     }
 }
 
