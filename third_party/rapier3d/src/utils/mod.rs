@@ -23,6 +23,7 @@ mod simd_real_copy;
 mod simd_select;
 #[cfg(feature = "alloc")]
 mod reused_vector;
+pub use reused_vector::{fill_entries, resize_entries};
 
 pub use component_mul::ComponentMul;
 pub use copysign::CopySign;

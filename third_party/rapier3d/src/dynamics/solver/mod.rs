@@ -52,6 +52,10 @@ pub unsafe fn reset_buffer<T>(buffer: &mut Vec<T>, len: usize) {
     buffer.clear();
     buffer.reserve(len);
 
+    // CompoSuite-ROS patch: no `memset` call for an empty buffer (see `utils::fill_entries`).
+    if len == 0 {
+        return;
+    }
     unsafe {
         // NOTE: writing zeros is faster than u8::MAX.
         buffer.as_mut_ptr().write_bytes(0, len);

@@ -55,7 +55,7 @@ impl SolverBodies {
     pub fn resize(&mut self, sz: usize) {
         self.vels.resize(sz, Default::default());
         self.poses.resize(sz, Default::default());
-        self.flags.resize(sz, 0);
+        crate::utils::resize_entries(&mut self.flags, sz, 0); // CompoSuite-ROS patch: no memset
     }
 
     pub fn len(&self) -> usize {

@@ -463,14 +463,16 @@ impl NarrowPhase {
     }
 
     fn update_awake_body_mask(&mut self, islands: &IslandManager) {
-        self.awake_body_mask.clear();
         let len = islands
             .active_bodies()
             .map(|h| h.into_raw_parts().0 as usize)
             .max()
             .map(|m| m + 1)
             .unwrap_or(0);
-        self.awake_body_mask.resize(len, false);
+        // CompoSuite-ROS patch: cleared and resized without a `memset` (see `fill_entries`).
+        self.awake_body_mask.truncate(len);
+        crate::utils::fill_entries(&mut self.awake_body_mask, false);
+        crate::utils::resize_entries(&mut self.awake_body_mask, len, false);
         for handle in islands.active_bodies() {
             self.awake_body_mask[handle.into_raw_parts().0 as usize] = true;
         }

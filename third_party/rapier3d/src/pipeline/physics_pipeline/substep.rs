@@ -327,18 +327,22 @@ impl PhysicsPipeline {
 
         // Apply some of delayed wake-ups.
         self.counters.stages.user_changes.start();
-        #[cfg(feature = "enhanced-determinism")]
-        let to_wake_up_iterator = impulse_joints
-            .to_wake_up
-            .drain(..)
-            .chain(multibody_joints.to_wake_up.drain(..));
-        #[cfg(not(feature = "enhanced-determinism"))]
-        let to_wake_up_iterator = impulse_joints
-            .to_wake_up
-            .drain()
-            .chain(multibody_joints.to_wake_up.drain());
-        for handle in to_wake_up_iterator {
-            islands.wake_up(bodies, handle, true);
+        // CompoSuite-ROS patch: an empty set is not drained (a drain clears the table's control
+        // bytes with a `memset`, see `utils::fill_entries`).
+        if !impulse_joints.to_wake_up.is_empty() || !multibody_joints.to_wake_up.is_empty() {
+            #[cfg(feature = "enhanced-determinism")]
+            let to_wake_up_iterator = impulse_joints
+                .to_wake_up
+                .drain(..)
+                .chain(multibody_joints.to_wake_up.drain(..));
+            #[cfg(not(feature = "enhanced-determinism"))]
+            let to_wake_up_iterator = impulse_joints
+                .to_wake_up
+                .drain()
+                .chain(multibody_joints.to_wake_up.drain());
+            for handle in to_wake_up_iterator {
+                islands.wake_up(bodies, handle, true);
+            }
         }
 
         // Quarantine user-introduced non-finite state before it reaches the broad-phase.
@@ -396,18 +400,21 @@ impl PhysicsPipeline {
         }
 
         // Join islands based on new joints.
-        #[cfg(feature = "enhanced-determinism")]
-        let to_join_iterator = impulse_joints
-            .to_join
-            .drain(..)
-            .chain(multibody_joints.to_join.drain(..));
-        #[cfg(not(feature = "enhanced-determinism"))]
-        let to_join_iterator = impulse_joints
-            .to_join
-            .drain()
-            .chain(multibody_joints.to_join.drain());
-        for (handle1, handle2) in to_join_iterator {
-            islands.interaction_changed(bodies, Some(handle1), Some(handle2), false);
+        // CompoSuite-ROS patch: empty sets are not drained (as `to_wake_up` above).
+        if !impulse_joints.to_join.is_empty() || !multibody_joints.to_join.is_empty() {
+            #[cfg(feature = "enhanced-determinism")]
+            let to_join_iterator = impulse_joints
+                .to_join
+                .drain(..)
+                .chain(multibody_joints.to_join.drain(..));
+            #[cfg(not(feature = "enhanced-determinism"))]
+            let to_join_iterator = impulse_joints
+                .to_join
+                .drain()
+                .chain(multibody_joints.to_join.drain());
+            for (handle1, handle2) in to_join_iterator {
+                islands.interaction_changed(bodies, Some(handle1), Some(handle2), false);
+            }
         }
 
         // Persistent islands: apply the joint connectivity edits (in order).

@@ -820,7 +820,7 @@ impl Multibody {
             return; // Nothing to do.
         }
 
-        self.accelerations.as_mut_slice().fill(0.0); // CompoSuite-ROS patch: a memset
+        crate::utils::fill_entries(self.accelerations.as_mut_slice(), 0.0); // CompoSuite-ROS patch
 
         // If there is significant movement, the semi-implicit coriolis term
         // occasionally cause instabilities due to the matrix being near singular.
