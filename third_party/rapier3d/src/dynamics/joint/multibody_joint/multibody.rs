@@ -1592,8 +1592,9 @@ impl Multibody {
             let q2 = self.links[c.link2].joint().coords()[c.axis2];
 
             // Jacobian J = e_{g2} − coeff·e_{g1}, then WJ = M⁻¹ J.
-            // CompoSuite-ROS patch: cleared as a slice (a memset), not entry by entry.
-            jacobians.as_mut_slice()[j_id..j_id + ndofs * 2].fill(0.0);
+            // CompoSuite-ROS patch: only J is cleared (not entry by entry, no `memset` call, see
+            // `utils::fill_entries`); the copy below writes all of the weighted half.
+            crate::utils::fill_entries(&mut jacobians.as_mut_slice()[j_id..j_id + ndofs], 0.0);
             jacobians[j_id + g2] += 1.0;
             jacobians[j_id + g1] -= c.coeff;
             for k in 0..ndofs {

@@ -33,8 +33,10 @@ pub fn unit_joint_limit_constraint(
     let rhs_wo_bias = 0.0;
 
     let dof_j_id = *j_id + dof_id + link.assembly_id;
-    // CompoSuite-ROS patch: cleared as a slice (a memset), not entry by entry.
-    jacobians.as_mut_slice()[*j_id..*j_id + ndofs * 2].fill(0.0);
+    // CompoSuite-ROS patch: only the row's Jacobian is cleared (not entry by entry, and
+    // without a `memset` call, see `utils::fill_entries`); `solve_unit_row` below writes all of
+    // the weighted half after it.
+    crate::utils::fill_entries(&mut jacobians.as_mut_slice()[*j_id..*j_id + ndofs], 0.0);
     jacobians[dof_j_id] = 1.0;
     // CompoSuite-ROS patch: M⁻¹·e_dof solved once per step for all the DoF's rows.
     multibody.solve_unit_row(
@@ -98,8 +100,10 @@ pub fn unit_joint_friction_constraint(
     let cfm_coeff = softness.cfm_coeff(params.dt);
 
     let dof_j_id = *j_id + dof_id + link.assembly_id;
-    // CompoSuite-ROS patch: cleared as a slice (a memset), not entry by entry.
-    jacobians.as_mut_slice()[*j_id..*j_id + ndofs * 2].fill(0.0);
+    // CompoSuite-ROS patch: only the row's Jacobian is cleared (not entry by entry, and
+    // without a `memset` call, see `utils::fill_entries`); `solve_unit_row` below writes all of
+    // the weighted half after it.
+    crate::utils::fill_entries(&mut jacobians.as_mut_slice()[*j_id..*j_id + ndofs], 0.0);
     jacobians[dof_j_id] = 1.0;
     // CompoSuite-ROS patch: M⁻¹·e_dof solved once per step for all the DoF's rows.
     multibody.solve_unit_row(
@@ -157,8 +161,10 @@ pub fn unit_joint_motor_constraint(
     let motor_params = motor.motor_params(params.dt);
 
     let dof_j_id = *j_id + dof_id + link.assembly_id;
-    // CompoSuite-ROS patch: cleared as a slice (a memset), not entry by entry.
-    jacobians.as_mut_slice()[*j_id..*j_id + ndofs * 2].fill(0.0);
+    // CompoSuite-ROS patch: only the row's Jacobian is cleared (not entry by entry, and
+    // without a `memset` call, see `utils::fill_entries`); `solve_unit_row` below writes all of
+    // the weighted half after it.
+    crate::utils::fill_entries(&mut jacobians.as_mut_slice()[*j_id..*j_id + ndofs], 0.0);
     jacobians[dof_j_id] = 1.0;
     // CompoSuite-ROS patch: M⁻¹·e_dof solved once per step for all the DoF's rows.
     multibody.solve_unit_row(
