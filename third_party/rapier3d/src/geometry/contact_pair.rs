@@ -1,6 +1,6 @@
 use super::CollisionEvent;
 use crate::alloc_prelude::*;
-use crate::dynamics::{RigidBodyHandle, RigidBodySet};
+use crate::dynamics::{MultibodyIndex, RigidBodyHandle, RigidBodySet};
 use crate::geometry::soft_contacts::{SoftPairContacts, SoftRigidContacts};
 use crate::geometry::{ColliderHandle, ColliderSet, Contact, ContactManifold};
 use crate::math::{Pose, Real, TangentImpulse, Vector};
@@ -218,6 +218,22 @@ pub struct ContactPair {
     /// The pair's contacts, in the form the two colliders call for: contact manifolds, or
     /// the contact candidates of two soft surfaces.
     pub contacts: PairContacts,
+    /// CompoSuite-ROS patch: set when the narrow phase last found the two colliders on links of
+    /// one multibody without self-contacts (a pair it empties and leaves, every step): while the
+    /// multibody set's topology and that multibody's setting are unchanged, the pair is skipped
+    /// (see `pair_update::process_pair`). Not serialized: the next update finds it again.
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    pub(crate) self_contact_filter: Option<SelfContactFilter>,
+}
+
+/// CompoSuite-ROS patch: what a [`ContactPair::self_contact_filter`] verdict rests on.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) struct SelfContactFilter {
+    /// The multibody both colliders' bodies are links of.
+    pub multibody: MultibodyIndex,
+    /// [`crate::dynamics::MultibodyJointSet`]'s topology epoch at the verdict: a multibody joint
+    /// inserted or removed since may have moved either body to another multibody.
+    pub topology_epoch: u32,
 }
 
 /// The contacts of a [`ContactPair`], with a fixed layout: the solver addresses a pair's manifolds
@@ -424,6 +440,7 @@ impl ContactPair {
             collider2,
             event_status: PairEventStatus::empty(),
             contacts: PairContacts::Rigid(RigidPairContacts::new()),
+            self_contact_filter: None,
         }
     }
 
@@ -434,6 +451,7 @@ impl ContactPair {
         self.collider1 = collider1;
         self.collider2 = collider2;
         self.event_status = PairEventStatus::empty();
+        self.self_contact_filter = None;
         match &mut self.contacts {
             PairContacts::Rigid(rigid) => {
                 rigid.clear();

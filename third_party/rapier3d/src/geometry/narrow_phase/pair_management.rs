@@ -275,6 +275,8 @@ impl NarrowPhase {
 
                         for edge_id in edges_to_recolor {
                             let pair = &mut self.contact_graph.graph.edges[edge_id].weight;
+                            // CompoSuite-ROS patch: a new parent may end a self-contact verdict.
+                            pair.self_contact_filter = None;
                             clear_pair_solver_color(&mut self.body_solver_color_masks, pair);
 
                             let touching = pair.has_any_active_contact();

@@ -88,6 +88,21 @@ pub(super) fn process_pair(
     #[cfg(feature = "parallel")] snd: &std::sync::mpsc::Sender<PairTransition>,
 ) -> u8 {
     let pair = &mut edge.weight;
+    // CompoSuite-ROS patch: a pair of two links of one multibody without self-contacts, found so
+    // before and emptied then (`self_contact_filter`), is left as it is while that still holds:
+    // every filter below would empty it again and report nothing (no contact, so no transition;
+    // its solver hint has a zero count, which no selection takes). The arm's link pairs were
+    // about half the pairs of a step.
+    if let Some(filter) = pair.self_contact_filter {
+        if filter.topology_epoch == multibody_joints.topology_epoch
+            && multibody_joints
+                .get_multibody(filter.multibody)
+                .is_some_and(|mb| !mb.self_contacts_enabled())
+        {
+            return OUTCOME_SKIPPED;
+        }
+        pair.self_contact_filter = None;
+    }
     let co1 = &colliders[pair.collider1];
     let co2 = &colliders[pair.collider2];
 
@@ -239,6 +254,11 @@ pub(super) fn process_pair(
                     // 1) check if self-contacts is enabled.
                     if let Some(mb) = multibody_joints.get_multibody(link1.multibody) {
                         if !mb.self_contacts_enabled() {
+                            pair.self_contact_filter =
+                                Some(crate::geometry::contact_pair::SelfContactFilter {
+                                    multibody: link1.multibody,
+                                    topology_epoch: multibody_joints.topology_epoch,
+                                });
                             if clear_filtered_pair(pair) {
                                 outcome = OUTCOME_CLEARED_IN_GRAPH;
                             }

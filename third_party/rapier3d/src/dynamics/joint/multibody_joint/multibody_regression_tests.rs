@@ -648,3 +648,57 @@ fn joint_friction_bounds_the_joint_force() {
         "an oversized friction bound must stay inert, not chatter: {extreme}"
     );
 }
+
+/// CompoSuite-ROS patch: the narrow phase skips a pair it found on two links of one multibody
+/// without self-contacts (`ContactPair::self_contact_filter`). The skip must end when the
+/// verdict's grounds change: self-contacts turned on, or a joint removed so that the two bodies
+/// are no longer links of one multibody.
+#[test]
+#[cfg(feature = "dim3")]
+fn self_contact_filter_follows_the_multibody() {
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::ZERO;
+    let root = world.insert_body(RigidBodyBuilder::fixed());
+    // Two links whose boxes overlap, each on its own joint to the root.
+    let (link1, collider1) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)),
+        ColliderBuilder::cuboid(0.5, 0.5, 0.5),
+    );
+    let (link2, collider2) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.4, 1.0, 0.0)),
+        ColliderBuilder::cuboid(0.5, 0.5, 0.5),
+    );
+    let joint = || RevoluteJointBuilder::new(Vector::new(0.0, 0.0, 1.0));
+    let joint1 = world.insert_multibody_joint(root, link1, joint()).unwrap();
+    let joint2 = world.insert_multibody_joint(root, link2, joint()).unwrap();
+    let set_self_contacts = |world: &mut PhysicsWorld, enabled: bool| {
+        let (multibody, _) = world.multibody_joints.get_mut(joint1).unwrap();
+        multibody.set_self_contacts_enabled(enabled);
+    };
+    let touching = |world: &PhysicsWorld| {
+        world
+            .narrow_phase
+            .contact_pair(collider1, collider2)
+            .is_some_and(|pair| pair.has_any_active_contact())
+    };
+
+    set_self_contacts(&mut world, false);
+    for _ in 0..3 {
+        world.step();
+        assert!(!touching(&world), "self-contacts are off");
+    }
+    set_self_contacts(&mut world, true);
+    world.step();
+    assert!(touching(&world), "self-contacts turned on: the pair is updated again");
+    set_self_contacts(&mut world, false);
+    for _ in 0..3 {
+        world.step();
+        assert!(!touching(&world), "self-contacts off again");
+    }
+    // Removing link 2's joint makes it a body of its own: a pair the filter no longer covers,
+    // even though the multibody left with link 1 has its self-contacts off too.
+    world.remove_multibody_joint(joint2);
+    set_self_contacts(&mut world, false);
+    world.step();
+    assert!(touching(&world), "two multibodies now: the pair is updated again");
+}
