@@ -450,6 +450,15 @@ pub(crate) fn dot_as_nalgebra(a: &[Real], b: &[Real]) -> Real {
     res
 }
 
+/// CompoSuite-ROS patch: `e_k · v` as nalgebra's `dot` (and [`dot_as_nalgebra`]) sums it, from
+/// `v[k]` alone, for a finite `v`: every running sum starts at +0, each product `0·v[i]` is an
+/// exact ±0 that leaves a sum as it is (`+0 + -0 = +0`), and `1·v[k]` is exact — so the sum is
+/// `v[k]`, except that a `v[k]` of -0 sums to +0.
+#[inline(always)]
+pub(crate) fn unit_dot_as_nalgebra(v_k: Real) -> Real {
+    if v_k == 0.0 { 0.0 } else { v_k }
+}
+
 /// CompoSuite-ROS patch: `y = alpha·x + y` entry by entry, as nalgebra's `axpy(alpha, x, 1)`
 /// computes it (`alpha·x[i]·1 + 1·y[i]`, both unit products exact), four entries at a time:
 /// the same bit for bit.
@@ -490,7 +499,7 @@ pub(crate) fn test_values(seed: u64, n: usize) -> crate::alloc_prelude::Vec<Real
 /// CompoSuite-ROS patch: the exact helpers against nalgebra's `dot` and `axpy`, bit for bit.
 #[cfg(test)]
 mod exact_as_nalgebra_tests {
-    use super::{axpy_as_nalgebra, dot_as_nalgebra, test_values};
+    use super::{axpy_as_nalgebra, dot_as_nalgebra, test_values, unit_dot_as_nalgebra};
     use crate::alloc_prelude::*;
     use crate::math::Real;
     use na::DVector;
@@ -512,6 +521,26 @@ mod exact_as_nalgebra_tests {
             theirs.axpy(alpha, &a, 1.0);
             let bits = |v: &DVector<Real>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&ours), bits(&theirs), "axpy, length {n}");
+        }
+    }
+
+    #[test]
+    fn unit_dot_equals_nalgebras_bit_for_bit() {
+        for n in 1..27 {
+            let mut v = DVector::from_column_slice(&test_values(n as u64 + 11, n));
+            // Zeros of both signs among the entries, at k and elsewhere.
+            v[0] = -0.0;
+            if n > 2 {
+                v[n / 2] = 0.0;
+            }
+            for k in 0..n {
+                let mut unit = DVector::<Real>::zeros(n);
+                unit[k] = 1.0;
+                let expected = unit.dot(&v).to_bits();
+                assert_eq!(unit_dot_as_nalgebra(v[k]).to_bits(), expected, "n {n}, k {k}");
+                let ours = dot_as_nalgebra(unit.as_slice(), v.as_slice()).to_bits();
+                assert_eq!(ours, expected, "dot_as_nalgebra, n {n}, k {k}");
+            }
         }
     }
 }

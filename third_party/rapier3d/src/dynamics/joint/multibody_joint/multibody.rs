@@ -1626,6 +1626,7 @@ impl Multibody {
                 cfm_coeff: 0.0,
                 cfm_gain: 0.0,
                 writeback_id: WritebackId::Dof(0),
+                unit_dof2: crate::dynamics::solver::NOT_A_UNIT_ROW, // e_g2 − coeff·e_g1
             };
 
             j_id += 2 * ndofs;

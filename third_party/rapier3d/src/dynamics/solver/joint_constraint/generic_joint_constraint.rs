@@ -31,7 +31,14 @@ pub struct GenericJointConstraint {
     pub cfm_gain: Real,
 
     pub writeback_id: WritebackId,
+
+    /// CompoSuite-ROS patch: when side 2's Jacobian is a unit vector (a multibody's motor, limit
+    /// or friction row on one DoF), the index of its 1; [`NOT_A_UNIT_ROW`] otherwise.
+    pub unit_dof2: u32,
 }
+
+/// [`GenericJointConstraint::unit_dof2`] of a row whose Jacobian is not a unit vector.
+pub const NOT_A_UNIT_ROW: u32 = u32::MAX;
 
 impl Default for GenericJointConstraint {
     fn default() -> Self {
@@ -59,6 +66,7 @@ impl GenericJointConstraint {
             cfm_coeff: Real::MAX,
             cfm_gain: Real::MAX,
             writeback_id: WritebackId::Dof(0),
+            unit_dof2: NOT_A_UNIT_ROW,
         }
     }
 
@@ -337,7 +345,14 @@ impl GenericJointConstraint {
         };
         let start = start as usize;
         let vels = &mut generic_solver_vels[start..start + n];
-        let dot = dot_as_nalgebra(&jacobians[j_id..j_id + n], vels);
+        let dot = if SIDE == 2 && self.unit_dof2 != NOT_A_UNIT_ROW {
+            // J = e_k: the dot product as nalgebra sums it is v[k] (for finite velocities; see
+            // `unit_dot_as_nalgebra`). It was a chain of dependent adds each row's solve waited
+            // on, every row of every pass.
+            crate::utils::unit_dot_as_nalgebra(vels[self.unit_dof2 as usize])
+        } else {
+            dot_as_nalgebra(&jacobians[j_id..j_id + n], vels)
+        };
         let (vel1, vel2): (Real, Real) = if SIDE == 1 { (dot, 0.0) } else { (0.0, dot) };
 
         let dvel = self.rhs + (vel2 - vel1);

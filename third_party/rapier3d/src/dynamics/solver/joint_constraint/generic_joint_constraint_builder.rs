@@ -2,7 +2,9 @@
 use simba::scalar::ComplexField;
 
 use crate::dynamics::solver::MotorParameters;
-use crate::dynamics::solver::joint_constraint::generic_joint_constraint::GenericJointConstraint;
+use crate::dynamics::solver::joint_constraint::generic_joint_constraint::{
+    GenericJointConstraint, NOT_A_UNIT_ROW,
+};
 use crate::dynamics::solver::joint_constraint::joint_velocity_constraint::WritebackId;
 use crate::dynamics::solver::joint_constraint::{
     AngularLimitParams, JointConstraintHelper, JointSolverBody,
@@ -437,6 +439,7 @@ impl JointConstraintHelper<Real> {
                 cfm_coeff: 0.0,
                 cfm_gain: 0.0,
                 writeback_id,
+                unit_dof2: NOT_A_UNIT_ROW,
             };
         }
 
@@ -486,6 +489,7 @@ impl JointConstraintHelper<Real> {
             cfm_coeff: 0.0,
             cfm_gain: 0.0,
             writeback_id,
+            unit_dof2: NOT_A_UNIT_ROW,
         }
     }
 

@@ -1,7 +1,7 @@
 pub use joint_velocity_constraint::{JointSolverBody, MotorParameters, WritebackId};
 
 pub use any_joint_constraint::AnyJointConstraintMut;
-pub use generic_joint_constraint::GenericJointConstraint;
+pub use generic_joint_constraint::{GenericJointConstraint, NOT_A_UNIT_ROW};
 pub(crate) use generic_joint_constraint_builder::GenericJointConstraintBuilder;
 pub use generic_joint_constraint_builder::{
     JointGenericExternalConstraintBuilder, JointGenericInternalConstraintBuilder, LinkOrBodyRef,
