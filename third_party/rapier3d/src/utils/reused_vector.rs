@@ -14,7 +14,7 @@ const MASKED_MEMSET_BYTES: usize = 64;
 /// back into a `memset` call), a longer one by `fill` (a `memset` for zeros).
 #[inline]
 pub fn fill_entries<T: Copy>(slice: &mut [T], value: T) {
-    if core::mem::size_of_val(slice) < MASKED_MEMSET_BYTES {
+    if is_short(slice) {
         for entry in slice {
             // SAFETY: `entry` is a valid, aligned, exclusive reference.
             unsafe { core::ptr::write_volatile(entry, value) };
@@ -24,8 +24,13 @@ pub fn fill_entries<T: Copy>(slice: &mut [T], value: T) {
     }
 }
 
-/// CompoSuite-ROS patch: `Vec::resize(len, value)` with the added entries written by
-/// [`fill_entries`] (`resize` fills them with a `memset`).
+/// Whether `memset` would clear `slice` with a masked store (see [`MASKED_MEMSET_BYTES`]).
+fn is_short<T>(slice: &[T]) -> bool {
+    core::mem::size_of_val(slice) < MASKED_MEMSET_BYTES
+}
+
+/// CompoSuite-ROS patch: `Vec::resize(len, value)` with the added entries written as
+/// [`fill_entries`] writes (`resize` fills them with a `memset`).
 pub fn resize_entries<T: Copy>(vector: &mut Vec<T>, len: usize, value: T) {
     let old_len = vector.len();
     if len <= old_len {
@@ -33,11 +38,18 @@ pub fn resize_entries<T: Copy>(vector: &mut Vec<T>, len: usize, value: T) {
         return;
     }
     vector.reserve(len - old_len);
-    let spare = &mut vector.spare_capacity_mut()[..len - old_len];
-    // SAFETY: `MaybeUninit<T>` has `T`'s layout; every one of the `len - old_len` entries is
-    // written before the length covers it.
-    let spare = unsafe { &mut *(spare as *mut [core::mem::MaybeUninit<T>] as *mut [T]) };
-    fill_entries(spare, value);
+    let added = &mut vector.spare_capacity_mut()[..len - old_len];
+    // Written through `MaybeUninit` (no reference to an uninitialised `T` is made).
+    if is_short(added) {
+        for slot in added {
+            // SAFETY: `slot` is a valid, aligned, exclusive place for a `T`.
+            unsafe { core::ptr::write_volatile(slot.as_mut_ptr(), value) };
+        }
+    } else {
+        for slot in added {
+            slot.write(value);
+        }
+    }
     // SAFETY: the entries up to `len` are initialised (above) and within the capacity.
     unsafe { vector.set_len(len) };
 }

@@ -6,6 +6,26 @@ use crate::dynamics::solver::{GenericJointConstraint, WritebackId};
 use crate::dynamics::{IntegrationParameters, JointMotor, Multibody};
 use crate::math::{DVector, Real};
 
+/// CompoSuite-ROS patch: writes a one-DoF row's Jacobian `J = e_k` (k: the DoF's index in the
+/// multibody) and its weighted Jacobian `M⁻¹·e_k` at `j_id`; returns k (the row's
+/// `unit_dof2`) and `Jᵀ·M⁻¹·J`. Only `J` is cleared (without a `memset` call, see
+/// `utils::fill_entries`): `solve_unit_row` writes all of the weighted half.
+fn unit_row_jacobians(
+    multibody: &Multibody,
+    link: &MultibodyLink,
+    dof_id: usize,
+    j_id: usize,
+    jacobians: &mut DVector,
+) -> (u32, Real) {
+    let ndofs = multibody.ndofs();
+    let dof = dof_id + link.assembly_id;
+    crate::utils::fill_entries(&mut jacobians.as_mut_slice()[j_id..j_id + ndofs], 0.0);
+    jacobians[j_id + dof] = 1.0;
+    // CompoSuite-ROS patch: M⁻¹·e_dof solved once per step for all the DoF's rows.
+    multibody.solve_unit_row(dof, &mut jacobians.rows_mut(j_id + ndofs, ndofs));
+    (dof as u32, jacobians[j_id + ndofs + dof]) // lhs = J^t * M^-1 J
+}
+
 /// Initializes and generate the velocity constraints applicable to the multibody links attached
 /// to this multibody_joint.
 pub fn unit_joint_limit_constraint(
@@ -32,19 +52,7 @@ pub fn unit_joint_limit_constraint(
     let rhs_bias = ((curr_pos - limits[1]).max(0.0) - (limits[0] - curr_pos).max(0.0)) * erp_inv_dt;
     let rhs_wo_bias = 0.0;
 
-    let dof_j_id = *j_id + dof_id + link.assembly_id;
-    // CompoSuite-ROS patch: only the row's Jacobian is cleared (not entry by entry, and
-    // without a `memset` call, see `utils::fill_entries`); `solve_unit_row` below writes all of
-    // the weighted half after it.
-    crate::utils::fill_entries(&mut jacobians.as_mut_slice()[*j_id..*j_id + ndofs], 0.0);
-    jacobians[dof_j_id] = 1.0;
-    // CompoSuite-ROS patch: M⁻¹·e_dof solved once per step for all the DoF's rows.
-    multibody.solve_unit_row(
-        dof_id + link.assembly_id,
-        &mut jacobians.rows_mut(*j_id + ndofs, ndofs),
-    );
-
-    let lhs = jacobians[dof_j_id + ndofs]; // = J^t * M^-1 J
+    let (unit_dof, lhs) = unit_row_jacobians(multibody, link, dof_id, *j_id, jacobians);
     let impulse_bounds = [
         min_enabled as u32 as Real * -Real::MAX,
         max_enabled as u32 as Real * Real::MAX,
@@ -70,7 +78,7 @@ pub fn unit_joint_limit_constraint(
         cfm_coeff,
         cfm_gain,
         writeback_id: WritebackId::Limit(dof_id),
-        unit_dof2: (dof_id + link.assembly_id) as u32, // J = e_dof (above)
+        unit_dof2: unit_dof,
     };
 
     constraints[*insert_at] = constraint;
@@ -100,19 +108,7 @@ pub fn unit_joint_friction_constraint(
     let ndofs = multibody.ndofs();
     let cfm_coeff = softness.cfm_coeff(params.dt);
 
-    let dof_j_id = *j_id + dof_id + link.assembly_id;
-    // CompoSuite-ROS patch: only the row's Jacobian is cleared (not entry by entry, and
-    // without a `memset` call, see `utils::fill_entries`); `solve_unit_row` below writes all of
-    // the weighted half after it.
-    crate::utils::fill_entries(&mut jacobians.as_mut_slice()[*j_id..*j_id + ndofs], 0.0);
-    jacobians[dof_j_id] = 1.0;
-    // CompoSuite-ROS patch: M⁻¹·e_dof solved once per step for all the DoF's rows.
-    multibody.solve_unit_row(
-        dof_id + link.assembly_id,
-        &mut jacobians.rows_mut(*j_id + ndofs, ndofs),
-    );
-
-    let lhs = jacobians[dof_j_id + ndofs]; // = J^t * M^-1 J
+    let (unit_dof, lhs) = unit_row_jacobians(multibody, link, dof_id, *j_id, jacobians);
     let max_impulse = friction * params.dt;
     let cfm_gain = lhs * cfm_coeff;
 
@@ -134,7 +130,7 @@ pub fn unit_joint_friction_constraint(
         cfm_coeff,
         cfm_gain,
         writeback_id: WritebackId::Friction(dof_id),
-        unit_dof2: (dof_id + link.assembly_id) as u32, // J = e_dof (above)
+        unit_dof2: unit_dof,
     };
 
     constraints[*insert_at] = constraint;
@@ -162,19 +158,7 @@ pub fn unit_joint_motor_constraint(
     let ndofs = multibody.ndofs();
     let motor_params = motor.motor_params(params.dt);
 
-    let dof_j_id = *j_id + dof_id + link.assembly_id;
-    // CompoSuite-ROS patch: only the row's Jacobian is cleared (not entry by entry, and
-    // without a `memset` call, see `utils::fill_entries`); `solve_unit_row` below writes all of
-    // the weighted half after it.
-    crate::utils::fill_entries(&mut jacobians.as_mut_slice()[*j_id..*j_id + ndofs], 0.0);
-    jacobians[dof_j_id] = 1.0;
-    // CompoSuite-ROS patch: M⁻¹·e_dof solved once per step for all the DoF's rows.
-    multibody.solve_unit_row(
-        dof_id + link.assembly_id,
-        &mut jacobians.rows_mut(*j_id + ndofs, ndofs),
-    );
-
-    let lhs = jacobians[dof_j_id + ndofs]; // = J^t * M^-1 J
+    let (unit_dof, lhs) = unit_row_jacobians(multibody, link, dof_id, *j_id, jacobians);
     let impulse_bounds = [-motor_params.max_impulse, motor_params.max_impulse];
     let cfm_gain = lhs * motor_params.cfm_coeff + motor_params.cfm_gain;
 
@@ -212,7 +196,7 @@ pub fn unit_joint_motor_constraint(
         rhs: rhs_wo_bias,
         rhs_wo_bias,
         writeback_id: WritebackId::Limit(dof_id),
-        unit_dof2: (dof_id + link.assembly_id) as u32, // J = e_dof (above)
+        unit_dof2: unit_dof,
     };
 
     constraints[*insert_at] = constraint;
