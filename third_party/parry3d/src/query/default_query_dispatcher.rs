@@ -737,6 +737,66 @@ where
         Ok(())
     }
 
+    /// CompoSuite-ROS patch: exactly the pairs `contact_manifolds` hands to
+    /// `contact_manifold_halfspace_pfm` (a half-space and a convex shape with a polygonal
+    /// feature map, not a ball), answered by `halfspace_pfm_surely_apart`.
+    fn contacts_surely_absent(
+        &self,
+        pos12: &Pose,
+        shape1: &dyn Shape,
+        shape2: &dyn Shape,
+        prediction: Real,
+    ) -> bool {
+        use crate::query::contact_manifolds::halfspace_pfm_surely_apart;
+
+        let other_route = |shape: &dyn Shape| {
+            shape.as_composite_shape().is_some()
+                || matches!(
+                    shape.shape_type(),
+                    ShapeType::TriMesh
+                        | ShapeType::HeightField
+                        | ShapeType::Voxels
+                        | ShapeType::Ball
+                )
+        };
+        if other_route(shape1) || other_route(shape2) {
+            return false;
+        }
+        // The same order of cases as `contact_manifold_convex_convex`'s.
+        match (shape1.shape_type(), shape2.shape_type()) {
+            (ShapeType::Cuboid, ShapeType::Cuboid) | (ShapeType::Capsule, ShapeType::Capsule) => {
+                false
+            }
+            (ShapeType::HalfSpace, _) => {
+                shape2
+                    .as_polygonal_feature_map()
+                    .is_some_and(|(pfm2, border_radius2)| {
+                        halfspace_pfm_surely_apart(
+                            pos12,
+                            shape1.as_halfspace().unwrap(),
+                            pfm2,
+                            border_radius2,
+                            prediction,
+                        )
+                    })
+            }
+            (_, ShapeType::HalfSpace) => {
+                shape1
+                    .as_polygonal_feature_map()
+                    .is_some_and(|(pfm1, border_radius1)| {
+                        halfspace_pfm_surely_apart(
+                            &pos12.inverse(),
+                            shape2.as_halfspace().unwrap(),
+                            pfm1,
+                            border_radius1,
+                            prediction,
+                        )
+                    })
+            }
+            _ => false,
+        }
+    }
+
     fn contact_manifold_convex_convex(
         &self,
         pos12: &Pose,

@@ -269,6 +269,19 @@ pub trait PersistentQueryDispatcher<ManifoldData = (), ContactData = ()>: QueryD
         prediction: Real,
         manifold: &mut ContactManifold<ManifoldData, ContactData>,
     ) -> Result<(), Unsupported>;
+
+    /// CompoSuite-ROS patch: `true` only when [`Self::contact_manifolds`] would surely leave a
+    /// pair of these shapes, holding one convex manifold, with that manifold and no contact
+    /// point in it — told more cheaply than by computing it. `false` when unsure (the default).
+    fn contacts_surely_absent(
+        &self,
+        _pos12: &Pose,
+        _g1: &dyn Shape,
+        _g2: &dyn Shape,
+        _prediction: Real,
+    ) -> bool {
+        false
+    }
 }
 
 /// Dispatcher for pairwise geometric queries between shapes.

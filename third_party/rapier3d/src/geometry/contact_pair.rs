@@ -310,6 +310,17 @@ pub struct RigidPairContacts {
 }
 
 impl RigidPairContacts {
+    /// CompoSuite-ROS patch: one manifold, without points or solver contacts and out of the
+    /// solver graph, and nothing besides (clusters, a composite workspace, soft contacts).
+    pub(crate) fn holds_one_idle_manifold(&self) -> bool {
+        self.solver_clusters.is_empty()
+            && self.workspace.is_none()
+            && self.soft.is_none()
+            && matches!(self.manifolds.as_slice(), [m] if m.points.is_empty()
+                && m.data.solver_contacts.is_empty()
+                && !m.data.graph_pos.is_some())
+    }
+
     fn new() -> Self {
         Self {
             manifolds: Vec::new(),

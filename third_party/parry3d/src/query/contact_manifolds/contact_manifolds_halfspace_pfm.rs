@@ -1,4 +1,4 @@
-use crate::math::{Pose, Real};
+use crate::math::{Pose, Real, Vector};
 use crate::query::{ContactManifold, TrackedContact};
 use crate::shape::{HalfSpace, PackedFeatureId, PolygonalFeature, PolygonalFeatureMap, Shape};
 
@@ -53,6 +53,14 @@ pub fn contact_manifold_halfspace_pfm<'a, ManifoldData, ContactData, S2>(
     ContactData: Default + Copy,
 {
     let normal1_2 = pos12.rotation.inverse() * halfspace1.normal;
+
+    // CompoSuite-ROS patch: a shape far above the plane answers without its support feature.
+    if halfspace_pfm_surely_apart(pos12, halfspace1, pfm2, border_radius2, prediction) {
+        manifold.points.clear();
+        set_halfspace_normals(manifold, halfspace1, normal1_2, flipped);
+        return;
+    }
+
     let mut feature2 = PolygonalFeature::default();
     pfm2.local_support_feature(-normal1_2, &mut feature2);
 
@@ -78,6 +86,39 @@ pub fn contact_manifold_halfspace_pfm<'a, ManifoldData, ContactData, S2>(
         }
     }
 
+    set_halfspace_normals(manifold, halfspace1, normal1_2, flipped);
+
+    // println!("Found contacts: {}", manifold.points.len());
+
+    // Transfer impulses.
+    manifold.match_contacts(&old_manifold_points);
+}
+
+/// CompoSuite-ROS patch: whether [`contact_manifold_halfspace_pfm`] would surely keep no contact
+/// point, told from one support point of the shape instead of its support feature. Every
+/// vertex of that feature lies on the shape, so none is nearer the plane than the shape's
+/// support point towards it; when that point is beyond `prediction` by more than any rounding
+/// of the distances there, the function's loop keeps no point. The margin is ~1000× the f32
+/// rounding of a distance at these coordinates.
+pub fn halfspace_pfm_surely_apart<S2: ?Sized + PolygonalFeatureMap>(
+    pos12: &Pose,
+    halfspace1: &HalfSpace,
+    pfm2: &S2,
+    border_radius2: Real,
+    prediction: Real,
+) -> bool {
+    let normal1_2 = pos12.rotation.inverse() * halfspace1.normal;
+    let deepest = pos12 * pfm2.local_support_point(-normal1_2);
+    let rounding_margin = 1.0e-4 * (1.0 + pos12.translation.length() + deepest.length());
+    deepest.dot(halfspace1.normal) - border_radius2 > prediction + rounding_margin
+}
+
+fn set_halfspace_normals<ManifoldData, ContactData>(
+    manifold: &mut ContactManifold<ManifoldData, ContactData>,
+    halfspace1: &HalfSpace,
+    normal1_2: Vector,
+    flipped: bool,
+) {
     if flipped {
         manifold.local_n1 = -normal1_2;
         manifold.local_n2 = halfspace1.normal;
@@ -85,9 +126,4 @@ pub fn contact_manifold_halfspace_pfm<'a, ManifoldData, ContactData, S2>(
         manifold.local_n1 = halfspace1.normal;
         manifold.local_n2 = -normal1_2;
     }
-
-    // println!("Found contacts: {}", manifold.points.len());
-
-    // Transfer impulses.
-    manifold.match_contacts(&old_manifold_points);
 }

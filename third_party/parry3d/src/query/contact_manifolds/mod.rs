@@ -152,6 +152,7 @@ pub use self::contact_manifolds_cuboid_triangle::{
 };
 pub use self::contact_manifolds_halfspace_pfm::{
     contact_manifold_halfspace_pfm, contact_manifold_halfspace_pfm_shapes,
+    halfspace_pfm_surely_apart,
 };
 pub use self::contact_manifolds_heightfield_composite_shape::contact_manifolds_heightfield_composite_shape;
 pub use self::contact_manifolds_heightfield_shape::{

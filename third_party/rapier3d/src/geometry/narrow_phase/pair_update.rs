@@ -64,6 +64,91 @@ pub(super) const OUTCOME_FULL_COMPOSITE: u8 = 5;
 // incremental reconcile needs, so the graph must be rebuilt from scratch (rare).
 pub(super) const OUTCOME_CLEARED_IN_GRAPH: u8 = 6;
 
+/// The relative configuration a full update ran at, for the next steps to recycle the pair
+/// while it stays close to it. (CompoSuite-ROS patch: moved here from `process_pair`, which
+/// also calls it for a pair `stays_idle` leaves.)
+fn remember_recycle_state(
+    rigid: &mut crate::geometry::RigidPairContacts,
+    co1: &crate::geometry::Collider,
+    co2: &crate::geometry::Collider,
+    pos12: crate::math::Pose,
+    contact_recycle_distance: Real,
+    prediction_distance: Real,
+) {
+    // Computing the local AABBs goes through a dyn Shape call per
+    // collider per full update; the extents only change when a
+    // shape does, so reuse the previous full update's value.
+    let shapes_changed =
+        (co1.changes | co2.changes).contains(crate::geometry::ColliderChanges::SHAPE);
+    let max_extent = match &rigid.recycle_state {
+        Some(state) if !shapes_changed => state.max_extent,
+        _ => {
+            let origin_radius = |co: &crate::geometry::Collider| {
+                let aabb = co.shape.compute_local_aabb();
+                aabb.mins.length().max(aabb.maxs.length())
+            };
+            origin_radius(co1).max(origin_radius(co2))
+        }
+    };
+    // A pair without contacts has an (unknown) separation larger than
+    // the prediction distance. Cap its recycle window by the
+    // prediction distance so an incoming contact can't be missed.
+    let max_drift = if rigid.has_any_active_contact() {
+        contact_recycle_distance
+    } else {
+        contact_recycle_distance.min(prediction_distance)
+    };
+    rigid.recycle_state = Some(crate::geometry::ContactRecycleState {
+        pos12,
+        rot1: co1.pos.rotation,
+        rot2: co2.pos.rotation,
+        max_extent,
+        max_drift,
+    });
+}
+
+/// CompoSuite-ROS patch: whether the pair can be left as it is because its update would surely
+/// find no contact again — the pair of the floor (a half-space, whose unbounded box meets every
+/// collider's) and a shape well above it, each step. That takes: the one manifold its last
+/// update left, empty and out of the solver graph; the dispatcher knowing the shapes apart
+/// beyond the prediction distance the update would use (so no soft CCD or soft surfaces,
+/// which widen it); colliders unchanged since, without hooks (which see every update).
+///
+/// The update would then write only what means nothing without a contact: the manifold's
+/// normals, body handles and material, and a solver hint whose count stays zero (its awake bit
+/// is read only with a non-zero count); no transition, and nothing for the solver graph to
+/// reconcile. A filter that applies now (a joint or multibody setting changed) would clear the
+/// manifold instead: no contact either way, and the next update that runs clears it.
+fn stays_idle(
+    pair: &ContactPair,
+    co1: &crate::geometry::Collider,
+    co2: &crate::geometry::Collider,
+    bodies: &RigidBodySet,
+    prediction_distance: Real,
+    query_dispatcher: &dyn PersistentQueryDispatcher<ContactManifoldData, ContactData>,
+) -> bool {
+    let unchanged_plain_rigid = |co: &crate::geometry::Collider| {
+        co.changes.is_empty()
+            && co.flags.active_hooks.is_empty()
+            && !co.is_deformable_collider()
+            && co.deformable_mesh_ref.is_none()
+            && co
+                .parent
+                .is_none_or(|p| bodies[p.handle].soft_ccd_prediction() == 0.0)
+    };
+    pair.rigid()
+        .is_some_and(|rigid| rigid.holds_one_idle_manifold())
+        && unchanged_plain_rigid(co1)
+        && unchanged_plain_rigid(co2)
+        && query_dispatcher.contacts_surely_absent(
+            &co1.pos.inv_mul(&co2.pos),
+            &*co1.shape,
+            &*co2.shape,
+            // What the update computes with no soft margins and no soft CCD.
+            prediction_distance + (co1.contact_skin() + co2.contact_skin()),
+        )
+}
+
 /// The per-pair contact update shared by `NarrowPhase::compute_contacts`'
 /// single-threaded and parallel dispatch paths; returns an `OUTCOME_*` tag.
 #[allow(clippy::too_many_arguments)]
@@ -187,6 +272,30 @@ pub(super) fn process_pair(
                 }
             }
         }
+    }
+
+    // CompoSuite-ROS patch: see `stays_idle`; the recycling state is what the update leaves.
+    if stays_idle(
+        pair,
+        co1,
+        co2,
+        bodies,
+        prediction_distance,
+        query_dispatcher,
+    ) {
+        if contact_recycle_distance > 0.0 {
+            if let Some(rigid) = pair.rigid_mut() {
+                remember_recycle_state(
+                    rigid,
+                    co1,
+                    co2,
+                    co1.pos.inv_mul(&co2.pos),
+                    contact_recycle_distance,
+                    prediction_distance,
+                );
+            }
+        }
+        return OUTCOME_SKIPPED;
     }
 
     let had_any_active_contact = pair.has_any_active_contact();
@@ -724,36 +833,14 @@ pub(super) fn process_pair(
         // Remember the relative configuration this full update ran at, so
         // subsequent steps can recycle the pair while it stays close to it.
         if contact_recycle_distance > 0.0 {
-            // Computing the local AABBs goes through a dyn Shape call per
-            // collider per full update; the extents only change when a
-            // shape does, so reuse the previous full update's value.
-            let shapes_changed =
-                (co1.changes | co2.changes).contains(crate::geometry::ColliderChanges::SHAPE);
-            let max_extent = match &rigid.recycle_state {
-                Some(state) if !shapes_changed => state.max_extent,
-                _ => {
-                    let origin_radius = |co: &crate::geometry::Collider| {
-                        let aabb = co.shape.compute_local_aabb();
-                        aabb.mins.length().max(aabb.maxs.length())
-                    };
-                    origin_radius(co1).max(origin_radius(co2))
-                }
-            };
-            // A pair without contacts has an (unknown) separation larger than
-            // the prediction distance. Cap its recycle window by the
-            // prediction distance so an incoming contact can't be missed.
-            let max_drift = if rigid.has_any_active_contact() {
-                contact_recycle_distance
-            } else {
-                contact_recycle_distance.min(prediction_distance)
-            };
-            rigid.recycle_state = Some(crate::geometry::ContactRecycleState {
+            remember_recycle_state(
+                rigid,
+                co1,
+                co2,
                 pos12,
-                rot1: co1.pos.rotation,
-                rot2: co2.pos.rotation,
-                max_extent,
-                max_drift,
-            });
+                contact_recycle_distance,
+                prediction_distance,
+            );
         }
     }
 

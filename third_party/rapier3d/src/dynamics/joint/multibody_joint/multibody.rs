@@ -8,17 +8,15 @@ use crate::dynamics::{
     IntegrationParameters, RigidBodyHandle, RigidBodySet, RigidBodyType, RigidBodyVelocity,
 };
 use crate::math::{
-    ANG_DIM, AngDim, AngVector, DIM, DVector, Dim, Jacobian, Pose, Real, SPATIAL_DIM,
-    SimdAngVector, Vector,
+    ANG_DIM, AngDim, AngVector, AngularInertia, DIM, DVector, Dim, Jacobian, Pose, Real,
+    SPATIAL_DIM, SimdAngVector, Vector,
 };
 use crate::prelude::MultibodyJoint;
 #[cfg(feature = "dim3")]
 use crate::utils::mat_to_na;
-use crate::utils::{copy_in_place, zero_in_place};
 use crate::utils::{AngularInertiaOps, CrossProduct, CrossProductMatrix, IndexMut2, vect_to_na};
-use na::{
-    self, DMatrix, DVectorView, DVectorViewMut, Dyn, OMatrix, SMatrix, SVector, StorageMut,
-};
+use crate::utils::{copy_in_place, zero_in_place};
+use na::{self, DMatrix, DVectorView, DVectorViewMut, Dyn, OMatrix, SMatrix, SVector, StorageMut};
 
 #[cfg(doc)]
 use crate::prelude::{GenericJoint, RigidBody};
@@ -400,6 +398,9 @@ pub struct Multibody {
     /// multiplies its rows by, in four lanes each.
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     jacobian_factors: Vec<wide::f32x4>,
+    /// CompoSuite-ROS patch: each link body's world angular inertia (an inverse of its inverse)
+    /// as `update_dynamics` found it, for the mass matrix and the accelerations to share.
+    link_inertias: Vec<AngularInertia>,
     /// CompoSuite-ROS patch: the energy guard's vectors, kept between steps.
     guard: EnergyGuardWorkspace,
 }
@@ -459,6 +460,7 @@ impl Multibody {
             inv_mass_columns: DMatrix::zeros(0, 0),
             jacobian_rows: Vec::new(),
             jacobian_factors: Vec::new(),
+            link_inertias: Vec::new(),
             guard: EnergyGuardWorkspace::default(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
@@ -815,7 +817,16 @@ impl Multibody {
             .extend((0..num_jacobians).map(|_| Jacobian::zeros(0)));
     }
 
-    pub(crate) fn update_acceleration(&mut self, dt: Real, bodies: &RigidBodySet) {
+    /// CompoSuite-ROS patch: the mass matrices and the accelerations of the links' bodies as
+    /// they are, in the order the solver needs them, with each body's world angular inertia
+    /// inverted once for both (the release inverted it in each).
+    pub(crate) fn update_dynamics(&mut self, dt: Real, bodies: &RigidBodySet) {
+        self.update_mass_matrix(dt, bodies);
+        self.update_acceleration(dt, bodies);
+    }
+
+    /// Reads the `link_inertias` the mass matrix update left: only `update_dynamics` calls it.
+    fn update_acceleration(&mut self, dt: Real, bodies: &RigidBodySet) {
         if self.ndofs == 0 {
             return; // Nothing to do.
         }
@@ -876,7 +887,7 @@ impl Multibody {
             // TODO: should gyroscopic forces already be computed by the rigid-body itself
             //       (at the same time that we add the gravity force)?
             let gyroscopic;
-            let rb_inertia = rb.mprops.effective_angular_inertia();
+            let rb_inertia = self.link_inertias[i];
             let rb_mass = rb.mprops.effective_mass();
 
             #[cfg(feature = "dim3")]
@@ -1148,6 +1159,13 @@ impl Multibody {
     }
 
     pub(crate) fn update_mass_matrix(&mut self, dt: Real, bodies: &RigidBodySet) {
+        // CompoSuite-ROS patch: each body's angular inertia once (see `link_inertias`).
+        self.link_inertias.clear();
+        self.link_inertias.extend(
+            self.links
+                .iter()
+                .map(|link| bodies[link.rigid_body].mprops.effective_angular_inertia()),
+        );
         if self.ndofs == 0 {
             return; // Nothing to do.
         }
@@ -1181,7 +1199,7 @@ impl Multibody {
             let link = &self.links[i];
             let rb = &bodies[link.rigid_body];
             let rb_mass = rb.mprops.effective_mass();
-            let rb_inertia = rb.mprops.effective_angular_inertia().into_matrix();
+            let rb_inertia = self.link_inertias[i].into_matrix();
             #[cfg(feature = "dim2")]
             let body_jacobian = self.body_jacobians[i].columns(0, width);
 
@@ -1225,12 +1243,9 @@ impl Multibody {
             // (In 3D both products are added below, with the Coriolis rows: `add_link_mass_terms`.)
             #[cfg(feature = "dim2")]
             if width > 0 {
-                self.augmented_mass.view_mut((0, 0), (width, width)).quadform(
-                    1.0,
-                    &rb_mass_matrix_wo_gyro,
-                    &body_jacobian,
-                    1.0,
-                );
+                self.augmented_mass
+                    .view_mut((0, 0), (width, width))
+                    .quadform(1.0, &rb_mass_matrix_wo_gyro, &body_jacobian, 1.0);
                 self.acc_augmented_mass
                     .view_mut((0, 0), (width, width))
                     .quadform(1.0, &rb_mass_matrix, &body_jacobian, 1.0);
@@ -1273,7 +1288,13 @@ impl Multibody {
 
                 // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
                 let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                gemm3(&mut coriolis_v, 1.0, &shift_cross_tr, &parent_coriolis_w, 1.0);
+                gemm3(
+                    &mut coriolis_v,
+                    1.0,
+                    &shift_cross_tr,
+                    &parent_coriolis_w,
+                    1.0,
+                );
 
                 // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
                 let dvel_cross = vect_to_na(
@@ -1295,7 +1316,13 @@ impl Multibody {
                 #[cfg(feature = "dim3")]
                 {
                     let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
-                    gemm3(&mut coriolis_w_parent, -1.0, &vel_wrt_joint_w, &parent_j_w, 1.0);
+                    gemm3(
+                        &mut coriolis_w_parent,
+                        -1.0,
+                        &vel_wrt_joint_w,
+                        &parent_j_w,
+                        1.0,
+                    );
                 }
                 let coriolis_v = &mut self.coriolis_v[i];
                 let coriolis_w = &mut self.coriolis_w[i];
@@ -1375,7 +1402,13 @@ impl Multibody {
             {
                 let mut i_coriolis_dt = self.i_coriolis_dt.columns_mut(0, width);
                 let mut i_coriolis_dt_w = i_coriolis_dt.fixed_rows_mut::<ANG_DIM>(DIM);
-                gemm3(&mut i_coriolis_dt_w, dt, &mat_to_na(rb_inertia), &coriolis_w, 0.0);
+                gemm3(
+                    &mut i_coriolis_dt_w,
+                    dt,
+                    &mat_to_na(rb_inertia),
+                    &coriolis_w,
+                    0.0,
+                );
             }
 
             #[cfg(feature = "dim3")]

@@ -689,7 +689,10 @@ fn self_contact_filter_follows_the_multibody() {
     }
     set_self_contacts(&mut world, true);
     world.step();
-    assert!(touching(&world), "self-contacts turned on: the pair is updated again");
+    assert!(
+        touching(&world),
+        "self-contacts turned on: the pair is updated again"
+    );
     set_self_contacts(&mut world, false);
     for _ in 0..3 {
         world.step();
@@ -700,5 +703,151 @@ fn self_contact_filter_follows_the_multibody() {
     world.remove_multibody_joint(joint2);
     set_self_contacts(&mut world, false);
     world.step();
-    assert!(touching(&world), "two multibodies now: the pair is updated again");
+    assert!(
+        touching(&world),
+        "two multibodies now: the pair is updated again"
+    );
+}
+
+/// CompoSuite-ROS patch: the narrow phase leaves a pair alone while its one manifold is empty
+/// and the dispatcher knows the shapes apart (`pair_update::stays_idle`, for the floor's pairs).
+/// Bodies falling onto, sliding on and bouncing off a half-space must move exactly as with a
+/// dispatcher that never claims that (the default dispatcher chained to itself), and the claim
+/// must have been made, or the test shows nothing: the skipping world's idle manifolds keep the
+/// normals of their last full update while the other world's follow the tumbling bodies.
+#[test]
+#[cfg(feature = "dim3")]
+fn idle_floor_pairs_move_as_fully_updated_ones() {
+    use crate::geometry::PairContacts;
+    use parry::query::{DefaultQueryDispatcher, QueryDispatcher};
+
+    let build = |narrow_phase: NarrowPhase| {
+        let mut world = PhysicsWorld::new();
+        world.narrow_phase = narrow_phase;
+        let ground = world.insert_body(RigidBodyBuilder::fixed());
+        world.insert_collider(
+            ColliderBuilder::halfspace(crate::na::Unit::new_unchecked(Vector::Y)),
+            Some(ground),
+        );
+        let mut colliders = Vec::new();
+        let shapes = [
+            ColliderBuilder::cuboid(0.2, 0.1, 0.3),
+            ColliderBuilder::capsule_y(0.2, 0.1),
+            ColliderBuilder::cylinder(0.1, 0.2),
+        ];
+        for (i, shape) in shapes.into_iter().enumerate() {
+            let body = RigidBodyBuilder::dynamic()
+                .translation(Vector::new(i as Real, 0.5 + 0.4 * i as Real, 0.0))
+                .linvel(Vector::new(0.3, 1.0, -0.2))
+                .angvel(Vector::new(2.0, -1.0, 3.0));
+            let (_, collider) = world.insert(body, shape.restitution(0.5));
+            colliders.push(collider);
+        }
+        (world, colliders)
+    };
+    let (mut skipping, colliders) = build(NarrowPhase::new());
+    let (mut full, _) = build(NarrowPhase::with_query_dispatcher(
+        DefaultQueryDispatcher.chain(DefaultQueryDispatcher),
+    ));
+    let floor_normal = |world: &PhysicsWorld, collider| {
+        let pair = world
+            .narrow_phase
+            .contact_pairs()
+            .find(|pair| pair.collider1 == collider || pair.collider2 == collider)
+            .expect("the floor's pair");
+        match &pair.contacts {
+            PairContacts::Rigid(rigid) => rigid.manifolds.first().map(|m| (m.local_n1, m.local_n2)),
+            PairContacts::Soft { .. } => None,
+        }
+    };
+    let mut touched = false;
+    let mut stale_normals = 0;
+    for step in 0..400 {
+        skipping.step();
+        full.step();
+        for &collider in &colliders {
+            let (a, b) = (&skipping.colliders[collider], &full.colliders[collider]);
+            assert_eq!(
+                a.position(),
+                b.position(),
+                "collider {collider:?} diverged at step {step}"
+            );
+            touched |= skipping
+                .narrow_phase
+                .contact_pairs()
+                .any(|pair| pair.has_any_active_contact());
+            if floor_normal(&skipping, collider) != floor_normal(&full, collider) {
+                stale_normals += 1;
+            }
+        }
+    }
+    assert!(touched, "the bodies reach the floor");
+    assert!(
+        stale_normals > 0,
+        "no pair was left idle: the shortcut never ran"
+    );
+}
+
+/// CompoSuite-ROS patch: parry's `halfspace_pfm_surely_apart` (the test behind the floor pairs'
+/// shortcuts) must never call a shape apart that `contact_manifold_halfspace_pfm`'s loop would
+/// give a point within the prediction distance — checked against that loop's own computation,
+/// over tumbling boxes, capsules and cylinders at heights around the prediction distance — and
+/// must call apart every shape clearly beyond it (or the shortcuts never run).
+#[test]
+#[cfg(feature = "dim3")]
+fn halfspace_apart_test_agrees_with_the_contact_loop() {
+    use parry::query::details::halfspace_pfm_surely_apart;
+    use parry::shape::{HalfSpace, PolygonalFeature, SharedShape};
+
+    let halfspace = HalfSpace::new(Vector::Y);
+    let prediction = 0.002;
+    let shapes = [
+        SharedShape::cuboid(0.2, 0.05, 0.3),
+        SharedShape::capsule_z(0.15, 0.04),
+        SharedShape::cylinder(0.1, 0.06),
+    ];
+    // A small deterministic generator: the cases are the same every run.
+    let mut state = 0x2545_f491_u32;
+    let mut unit = move || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as Real / u32::MAX as Real
+    };
+    let (mut apart, mut clearly_beyond) = (0, 0);
+    for shape in &shapes {
+        let (pfm, border_radius) = shape.as_polygonal_feature_map().unwrap();
+        for _ in 0..4000 {
+            let axis = Vector::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vector::X);
+            let rotation = Rotation::from_scaled_axis(axis * (unit() * 6.3));
+            let position = Vector::new(unit() - 0.5, 0.0, unit() - 0.5);
+            let pose = Pose::from_parts(position, rotation);
+            // Place the shape's lowest point at a height within ±1 cm of the prediction.
+            let lowest = |pose: &Pose| {
+                let n = pose.rotation.inverse() * halfspace.normal;
+                let mut feature = PolygonalFeature::default();
+                pfm.local_support_feature(-n, &mut feature);
+                (0..feature.num_vertices)
+                    .map(|i| (pose * feature.vertices[i]).dot(halfspace.normal) - border_radius)
+                    .fold(Real::INFINITY, Real::min)
+            };
+            let lift = prediction + (unit() - 0.5) * 0.02 - lowest(&pose);
+            let pose = Pose::from_parts(position + Vector::Y * lift, rotation);
+            let nearest = lowest(&pose);
+            let surely_apart =
+                halfspace_pfm_surely_apart(&pose, &halfspace, pfm, border_radius, prediction);
+            if surely_apart {
+                apart += 1;
+                assert!(
+                    nearest > prediction,
+                    "called apart at {nearest} (prediction {prediction})"
+                );
+            }
+            if nearest > prediction + 1.0e-3 {
+                clearly_beyond += 1;
+                assert!(surely_apart, "not called apart at {nearest}");
+            }
+        }
+    }
+    assert!(apart > 1000 && clearly_beyond > 1000, "{apart} apart, {clearly_beyond} beyond");
 }

@@ -108,8 +108,7 @@ impl VelocitySolver {
                 .get_multibody_mut_internal(link.multibody)
                 .unwrap();
             multibody.update_velocities(bodies);
-            multibody.update_mass_matrix(params.dt, bodies);
-            multibody.update_acceleration(params.dt, bodies);
+            multibody.update_dynamics(params.dt, bodies);
 
             let mut solver_vels_incr = self
                 .generic_solver_vels_increment
@@ -146,8 +145,7 @@ impl VelocitySolver {
 
             if !is_last_substep {
                 multibody.update_velocities(bodies);
-                multibody.update_mass_matrix(params.dt, bodies);
-                multibody.update_acceleration(params.dt, bodies);
+                multibody.update_dynamics(params.dt, bodies);
 
                 let mut solver_vels_incr = self
                     .generic_solver_vels_increment
