@@ -447,9 +447,7 @@ impl PhysicsPipeline {
         for multibody in &mut multibody_joints.multibodies {
             // CompoSuite-ROS patch: skipped when nothing changed since it last ran.
             multibody.1.forward_kinematics_if_changed(bodies, true);
-            multibody
-                .1
-                .update_rigid_bodies_internal(bodies, true, false, false);
+            multibody.1.place_rigid_bodies_where_moved(bodies);
         }
 
         // The soft meshes' vertex caches, read by the soft contact passes.

@@ -1835,6 +1835,41 @@ impl Multibody {
         }
     }
 
+    /// CompoSuite-ROS patch: `update_rigid_bodies_internal(bodies, true, false, false)` — each
+    /// link's body placed at its link pose, its world mass properties updated — for the bodies
+    /// not already there. A body whose pose and next pose hold its link pose bit for bit, with
+    /// no change to its type, colliders or mass properties pending, got those mass properties
+    /// from that pose when it was put there (the end of the last step), the same function of
+    /// the same inputs: it is left alone. At the start of a step where forward kinematics did
+    /// not run, that is every link.
+    pub(crate) fn place_rigid_bodies_where_moved(&self, bodies: &mut RigidBodySet) {
+        use crate::dynamics::RigidBodyChanges;
+        let same_bits = |a: &Pose, b: &Pose| {
+            let bits = |p: &Pose| {
+                let (t, r) = (p.translation, p.rotation);
+                [t.x, t.y, t.z, r.x, r.y, r.z, r.w].map(Real::to_bits)
+            };
+            bits(a) == bits(b)
+        };
+        let mass_inputs_changed = RigidBodyChanges::TYPE
+            | RigidBodyChanges::COLLIDERS
+            | RigidBodyChanges::LOCAL_MASS_PROPERTIES
+            | RigidBodyChanges::POSITION;
+        for link in self.links.iter() {
+            if let Some(rb) = bodies.get_mut_internal(link.rigid_body) {
+                let placed = same_bits(&rb.pos.position, &link.local_to_world)
+                    && same_bits(&rb.pos.next_position, &link.local_to_world)
+                    && !rb.changes.intersects(mass_inputs_changed);
+                if !placed {
+                    rb.pos.next_position = link.local_to_world;
+                    rb.pos.position = link.local_to_world;
+                    rb.mprops
+                        .update_world_mass_properties(rb.body_type, &link.local_to_world);
+                }
+            }
+        }
+    }
+
     // TODO: make a version that doesn’t write back to bodies and doesn’t update the jacobians
     //       (i.e. just something used by the velocity solver’s small steps).
     /// Apply forward-kinematics to this multibody.

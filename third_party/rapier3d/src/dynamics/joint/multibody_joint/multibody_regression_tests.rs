@@ -851,3 +851,55 @@ fn halfspace_apart_test_agrees_with_the_contact_loop() {
     }
     assert!(apart > 1000 && clearly_beyond > 1000, "{apart} apart, {clearly_beyond} beyond");
 }
+
+/// CompoSuite-ROS patch: `place_rigid_bodies_where_moved` leaves a link's body alone when it
+/// is at its link pose with no mass-property change pending (a marker put in its world centre
+/// of mass survives), and otherwise puts it there with the world mass properties of that pose:
+/// when moved away without the pipeline's knowledge, and when a mass change is pending.
+#[test]
+#[cfg(feature = "dim3")]
+fn links_are_placed_only_where_moved() {
+    let mut world = PhysicsWorld::new();
+    let root = world.insert_body(RigidBodyBuilder::fixed());
+    let (link, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)),
+        ColliderBuilder::cuboid(0.1, 0.4, 0.2),
+    );
+    let joint = RevoluteJointBuilder::new(Vector::new(0.0, 0.0, 1.0))
+        .local_anchor2(Vector::new(0.0, -0.5, 0.0));
+    let handle = world.insert_multibody_joint(root, link, joint).unwrap();
+    for _ in 0..10 {
+        world.step();
+    }
+    let marker = Vector::new(7.0, 7.0, 7.0);
+    let place = |world: &mut PhysicsWorld| {
+        let (multibody, _) = world.multibody_joints.get(handle).unwrap();
+        multibody.place_rigid_bodies_where_moved(&mut world.bodies);
+    };
+    let fresh_com = |world: &PhysicsWorld| {
+        let rb = &world.bodies[link];
+        let mut fresh = rb.mprops.clone();
+        fresh.update_world_mass_properties(rb.body_type, &rb.pos.position);
+        fresh.world_com
+    };
+
+    world.bodies.get_mut_internal(link).unwrap().mprops.world_com = marker;
+    place(&mut world);
+    assert_eq!(world.bodies[link].mprops.world_com, marker, "in place: left alone");
+
+    let placed = world.bodies[link].pos.position;
+    let body = world.bodies.get_mut_internal(link).unwrap();
+    body.pos.position = Pose::from_translation(Vector::new(0.3, 2.0, 0.1));
+    place(&mut world);
+    assert_eq!(world.bodies[link].pos.position, placed, "moved away: put back");
+    assert_eq!(world.bodies[link].mprops.world_com, fresh_com(&world));
+
+    world.bodies.get_mut_internal(link).unwrap().mprops.world_com = marker;
+    world.bodies[link].set_additional_mass(2.0, true);
+    place(&mut world);
+    assert_eq!(
+        world.bodies[link].mprops.world_com,
+        fresh_com(&world),
+        "a mass change pending: updated"
+    );
+}
