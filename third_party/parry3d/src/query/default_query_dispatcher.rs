@@ -762,11 +762,9 @@ where
         if other_route(shape1) || other_route(shape2) {
             return false;
         }
-        // The same order of cases as `contact_manifold_convex_convex`'s.
+        // As `contact_manifold_convex_convex` routes them (its earlier cases involve no
+        // half-space, or a ball, excluded above).
         match (shape1.shape_type(), shape2.shape_type()) {
-            (ShapeType::Cuboid, ShapeType::Cuboid) | (ShapeType::Capsule, ShapeType::Capsule) => {
-                false
-            }
             (ShapeType::HalfSpace, _) => {
                 shape2
                     .as_polygonal_feature_map()

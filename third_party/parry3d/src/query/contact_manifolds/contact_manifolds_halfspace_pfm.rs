@@ -55,7 +55,7 @@ pub fn contact_manifold_halfspace_pfm<'a, ManifoldData, ContactData, S2>(
     let normal1_2 = pos12.rotation.inverse() * halfspace1.normal;
 
     // CompoSuite-ROS patch: a shape far above the plane answers without its support feature.
-    if halfspace_pfm_surely_apart(pos12, halfspace1, pfm2, border_radius2, prediction) {
+    if surely_apart_along(pos12, halfspace1, normal1_2, pfm2, border_radius2, prediction) {
         manifold.points.clear();
         set_halfspace_normals(manifold, halfspace1, normal1_2, flipped);
         return;
@@ -108,6 +108,18 @@ pub fn halfspace_pfm_surely_apart<S2: ?Sized + PolygonalFeatureMap>(
     prediction: Real,
 ) -> bool {
     let normal1_2 = pos12.rotation.inverse() * halfspace1.normal;
+    surely_apart_along(pos12, halfspace1, normal1_2, pfm2, border_radius2, prediction)
+}
+
+/// [`halfspace_pfm_surely_apart`] with the plane's normal in the shape's frame at hand.
+fn surely_apart_along<S2: ?Sized + PolygonalFeatureMap>(
+    pos12: &Pose,
+    halfspace1: &HalfSpace,
+    normal1_2: Vector,
+    pfm2: &S2,
+    border_radius2: Real,
+    prediction: Real,
+) -> bool {
     let deepest = pos12 * pfm2.local_support_point(-normal1_2);
     let rounding_margin = 1.0e-4 * (1.0 + pos12.translation.length() + deepest.length());
     deepest.dot(halfspace1.normal) - border_radius2 > prediction + rounding_margin

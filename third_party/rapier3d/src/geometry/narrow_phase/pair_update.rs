@@ -107,8 +107,8 @@ fn remember_recycle_state(
     });
 }
 
-/// CompoSuite-ROS patch: whether the pair can be left as it is because its update would surely
-/// find no contact again — the pair of the floor (a half-space, whose unbounded box meets every
+/// CompoSuite-ROS patch: the colliders' relative pose when the pair can be left as it is
+/// because its update would surely find no contact again (`None` otherwise) — the pair of the floor (a half-space, whose unbounded box meets every
 /// collider's) and a shape well above it, each step. That takes: the one manifold its last
 /// update left, empty and out of the solver graph; the dispatcher knowing the shapes apart
 /// beyond the prediction distance the update would use (so no soft CCD or soft surfaces,
@@ -126,7 +126,7 @@ fn stays_idle(
     bodies: &RigidBodySet,
     prediction_distance: Real,
     query_dispatcher: &dyn PersistentQueryDispatcher<ContactManifoldData, ContactData>,
-) -> bool {
+) -> Option<crate::math::Pose> {
     let unchanged_plain_rigid = |co: &crate::geometry::Collider| {
         co.changes.is_empty()
             && co.flags.active_hooks.is_empty()
@@ -136,17 +136,24 @@ fn stays_idle(
                 .parent
                 .is_none_or(|p| bodies[p.handle].soft_ccd_prediction() == 0.0)
     };
-    pair.rigid()
+    if !(pair
+        .rigid()
         .is_some_and(|rigid| rigid.holds_one_idle_manifold())
         && unchanged_plain_rigid(co1)
-        && unchanged_plain_rigid(co2)
-        && query_dispatcher.contacts_surely_absent(
-            &co1.pos.inv_mul(&co2.pos),
+        && unchanged_plain_rigid(co2))
+    {
+        return None;
+    }
+    let pos12 = co1.pos.inv_mul(&co2.pos);
+    query_dispatcher
+        .contacts_surely_absent(
+            &pos12,
             &*co1.shape,
             &*co2.shape,
             // What the update computes with no soft margins and no soft CCD.
             prediction_distance + (co1.contact_skin() + co2.contact_skin()),
         )
+        .then_some(pos12)
 }
 
 /// The per-pair contact update shared by `NarrowPhase::compute_contacts`'
@@ -275,7 +282,7 @@ pub(super) fn process_pair(
     }
 
     // CompoSuite-ROS patch: see `stays_idle`; the recycling state is what the update leaves.
-    if stays_idle(
+    if let Some(pos12) = stays_idle(
         pair,
         co1,
         co2,
@@ -289,7 +296,7 @@ pub(super) fn process_pair(
                     rigid,
                     co1,
                     co2,
-                    co1.pos.inv_mul(&co2.pos),
+                    pos12,
                     contact_recycle_distance,
                     prediction_distance,
                 );

@@ -83,6 +83,13 @@ fn map_columns3<RY: na::Dim, RB: na::Dim, SY, SB>(
     }
 }
 
+/// CompoSuite-ROS patch: a pose's translation then rotation (x, y, z, w), bit for bit: what
+/// `collect_fk_inputs` records and `place_rigid_bodies_where_moved` compares.
+fn pose_bits(pose: &Pose) -> [u32; 7] {
+    let (t, r) = (pose.translation, pose.rotation);
+    [t.x, t.y, t.z, r.x, r.y, r.z, r.w].map(Real::to_bits)
+}
+
 /// CompoSuite-ROS patch: the columns of a 3 × 3 matrix in the first three lanes of `f32x4`s:
 /// lane i then runs entry i's scalar operations.
 #[cfg(feature = "dim3")]
@@ -1844,13 +1851,7 @@ impl Multibody {
     /// not run, that is every link.
     pub(crate) fn place_rigid_bodies_where_moved(&self, bodies: &mut RigidBodySet) {
         use crate::dynamics::RigidBodyChanges;
-        let same_bits = |a: &Pose, b: &Pose| {
-            let bits = |p: &Pose| {
-                let (t, r) = (p.translation, p.rotation);
-                [t.x, t.y, t.z, r.x, r.y, r.z, r.w].map(Real::to_bits)
-            };
-            bits(a) == bits(b)
-        };
+        let same_bits = |a: &Pose, b: &Pose| pose_bits(a) == pose_bits(b);
         let mass_inputs_changed = RigidBodyChanges::TYPE
             | RigidBodyChanges::COLLIDERS
             | RigidBodyChanges::LOCAL_MASS_PROPERTIES
@@ -1975,10 +1976,6 @@ impl Multibody {
             self.links.len() as u32,
             self.ndofs as u32,
         ]);
-        let pose_bits = |out: &mut Vec<u32>, pose: &Pose| {
-            out.extend(pose.translation.as_ref().iter().map(|x| x.to_bits()));
-            out.extend(pose.rotation.as_ref().iter().map(|x| x.to_bits()));
-        };
         for link in self.links.iter() {
             let joint = &link.joint;
             out.extend([
@@ -1988,8 +1985,8 @@ impl Multibody {
             ]);
             out.extend(joint.coords.iter().map(|x| x.to_bits()));
             out.extend(joint.joint_rot.as_ref().iter().map(|x| x.to_bits()));
-            pose_bits(out, &joint.data.local_frame1);
-            pose_bits(out, &joint.data.local_frame2);
+            out.extend(pose_bits(&joint.data.local_frame1));
+            out.extend(pose_bits(&joint.data.local_frame2));
             match bodies.get(link.rigid_body) {
                 Some(rb) => {
                     out.push(rb.is_dynamic() as u32);

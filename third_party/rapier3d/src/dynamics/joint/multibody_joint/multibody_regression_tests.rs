@@ -818,7 +818,8 @@ fn halfspace_apart_test_agrees_with_the_contact_loop() {
     for shape in &shapes {
         let (pfm, border_radius) = shape.as_polygonal_feature_map().unwrap();
         for _ in 0..4000 {
-            let axis = Vector::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vector::X);
+            let axis =
+                Vector::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vector::X);
             let rotation = Rotation::from_scaled_axis(axis * (unit() * 6.3));
             let position = Vector::new(unit() - 0.5, 0.0, unit() - 0.5);
             let pose = Pose::from_parts(position, rotation);
@@ -849,7 +850,10 @@ fn halfspace_apart_test_agrees_with_the_contact_loop() {
             }
         }
     }
-    assert!(apart > 1000 && clearly_beyond > 1000, "{apart} apart, {clearly_beyond} beyond");
+    assert!(
+        apart > 1000 && clearly_beyond > 1000,
+        "{apart} apart, {clearly_beyond} beyond"
+    );
 }
 
 /// CompoSuite-ROS patch: `place_rigid_bodies_where_moved` leaves a link's body alone when it
@@ -883,18 +887,34 @@ fn links_are_placed_only_where_moved() {
         fresh.world_com
     };
 
-    world.bodies.get_mut_internal(link).unwrap().mprops.world_com = marker;
+    world
+        .bodies
+        .get_mut_internal(link)
+        .unwrap()
+        .mprops
+        .world_com = marker;
     place(&mut world);
-    assert_eq!(world.bodies[link].mprops.world_com, marker, "in place: left alone");
+    assert_eq!(
+        world.bodies[link].mprops.world_com, marker,
+        "in place: left alone"
+    );
 
     let placed = world.bodies[link].pos.position;
     let body = world.bodies.get_mut_internal(link).unwrap();
     body.pos.position = Pose::from_translation(Vector::new(0.3, 2.0, 0.1));
     place(&mut world);
-    assert_eq!(world.bodies[link].pos.position, placed, "moved away: put back");
+    assert_eq!(
+        world.bodies[link].pos.position, placed,
+        "moved away: put back"
+    );
     assert_eq!(world.bodies[link].mprops.world_com, fresh_com(&world));
 
-    world.bodies.get_mut_internal(link).unwrap().mprops.world_com = marker;
+    world
+        .bodies
+        .get_mut_internal(link)
+        .unwrap()
+        .mprops
+        .world_com = marker;
     world.bodies[link].set_additional_mass(2.0, true);
     place(&mut world);
     assert_eq!(
