@@ -48,6 +48,7 @@ Also usable as a library (the tests do): `RolloutCollector`, `compute_advantages
 from __future__ import annotations
 
 import argparse
+import json
 import csv
 import math
 import os
@@ -330,7 +331,7 @@ class RolloutCollector:
     act_fn(obs) -> (actions, logp, values) for a (num_envs, obs_dim) batch; actions are clipped
     to the action-space bounds before they reach the env, but stored unclipped."""
 
-    def __init__(self, env, seed: int | None):
+    def __init__(self, env, seed: int | None, recorder=None):
         mode = env.metadata.get("autoreset_mode")
         if mode is not None and getattr(mode, "name", str(mode)) not in ("NEXT_STEP", "NextStep"):
             raise ValueError(f"the vector env autoresets in mode {mode}; this trainer needs "
@@ -339,7 +340,11 @@ class RolloutCollector:
         self.num_envs = env.num_envs
         space = env.single_action_space
         self.act_low, self.act_high, self.act_dtype = space.low, space.high, space.dtype
-        obs, _ = env.reset(seed=seed)
+        obs, info = env.reset(seed=seed)
+        # Every episode the learner plays, for a medium-replay dataset (--dataset-out).
+        self.recorder = recorder
+        if recorder is not None:
+            recorder.reset(obs, info)
         self.obs = np.asarray(obs, dtype=np.float64)
         # True where the last step ended an episode: that env's next step is a reset step
         self.reset_pending = np.zeros(self.num_envs, bool)
@@ -364,6 +369,8 @@ class RolloutCollector:
 
             env_act = np.clip(act, self.act_low, self.act_high).astype(self.act_dtype)
             obs, rew, terminated, truncated, info = self.env.step(env_act)
+            if self.recorder is not None:
+                self.recorder.step(env_act, obs, rew, terminated, truncated, info)
             self.total_steps += n
             terminated = np.asarray(terminated, bool) & valid
             truncated = np.asarray(truncated, bool) & valid
@@ -499,7 +506,15 @@ def train(args, env=None) -> list[dict]:
     # original learns it (--learn-log-std).
     trained_pi = agent.pi if args.learn_log_std else agent.pi[:-1]
     pi_opt, v_opt = Adam(trained_pi, args.pi_lr), Adam(agent.v, args.v_lr)
-    collector = RolloutCollector(env, seed=args.seed)
+    recorder = None
+    if args.dataset_out:
+        from composuite_ros.datasets.run_recorder import RunRecorder
+
+        recorder = RunRecorder(args.dataset_out, env, attrs={
+            "learner": "examples/ppo_train.py (PPO, the paper's learner)",
+            "learner_args": json.dumps({k: v for k, v in vars(args).items()
+                                        if isinstance(v, (int, float, str, list, type(None)))})})
+    collector = RolloutCollector(env, seed=args.seed, recorder=recorder)
     rows = []
     try:
         for epoch in range(1, args.epochs + 1):
@@ -567,6 +582,10 @@ def train(args, env=None) -> list[dict]:
                 _append_csv(args.log, row)
     finally:
         env.close()
+        if recorder is not None:
+            recorder.close()
+            print(f"run file {args.dataset_out}: {recorder.episodes} episodes, {recorder.rows} rows "
+                  "(composuite-dataset subsample makes a medium-replay dataset of it)", flush=True)
     if args.save:
         agent.save(args.save)
     return rows
@@ -669,6 +688,10 @@ def parse_args(argv=None):
                      help="append one CSV row per epoch (header written if the file is new)")
     out.add_argument("--save", default=None, metavar="PATH.npz",
                      help="save the final parameters (numpy .npz) here")
+    out.add_argument("--dataset-out", default=None, metavar="RUN.hdf5",
+                     help="record every episode the learner plays (in-process backend) into a "
+                          "run file; `composuite-dataset subsample RUN.hdf5` turns it into a "
+                          "medium-replay offline dataset")
     out.add_argument("--check-gradients", action="store_true",
                      help="only compare the analytic gradients with finite differences and exit "
                           "(status 1 if a relative error is >= 1e-4)")
@@ -686,6 +709,8 @@ def parse_args(argv=None):
             p.error("--num-envs differs from the number of --namespaces")
     if args.num_envs is None:
         args.num_envs = 1
+    if args.dataset_out and (args.gym_id or args.backend != "native"):
+        p.error("--dataset-out records the in-process CompoSuite env: use it with --backend native")
     if args.num_envs < 1:
         p.error("--num-envs must be >= 1")
     if args.namespaces is None:

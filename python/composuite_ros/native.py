@@ -271,6 +271,11 @@ class CompoSuiteNativeVectorEnv(VectorEnv):
         return self._batch.threads
 
     @property
+    def horizon(self) -> int:
+        """Episode length limit in control steps."""
+        return int(self._batch.horizon)
+
+    @property
     def tasks(self) -> list[Task]:
         return [Task.parse(t) for t in self._batch.tasks()]
 

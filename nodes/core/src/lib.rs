@@ -13,6 +13,7 @@ pub mod arena;
 pub mod axes;
 pub mod batch;
 pub mod control;
+pub mod dataset;
 pub mod env;
 pub mod expert;
 pub mod kinematics;

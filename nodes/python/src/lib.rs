@@ -5,8 +5,11 @@
 //! `run()` (one call, the GIL released while the environments step on the batch's threads),
 //! and reads the rows back. The Gymnasium envs of `composuite_ros.native` are built on it; this
 //! crate converts and releases the GIL, and decides nothing about environments. `StateRenderer`
-//! (`render.rs`) draws a scene from an observation alone, for the env over ROS.
+//! (`render.rs`) draws a scene from an observation alone, for the env over ROS. `Collector` and
+//! `replay` (`dataset.rs`) play and replay offline datasets' episodes inside the core, for
+//! `composuite_ros.datasets`.
 
+mod dataset;
 mod render;
 
 use composuite_core::TaskSpec;
@@ -485,6 +488,14 @@ fn sample_tasks(
 mod _native {
     #[pymodule_export]
     use super::Batch;
+    #[pymodule_export]
+    use super::dataset::Collector;
+    #[pymodule_export]
+    use super::dataset::dataset_policies;
+    #[pymodule_export]
+    use super::dataset::reference_task_names;
+    #[pymodule_export]
+    use super::dataset::replay;
     #[pymodule_export]
     use super::end_reasons;
     #[pymodule_export]
