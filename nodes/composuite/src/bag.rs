@@ -13,6 +13,8 @@ use composuite_msgs::msg;
 use composuite_ros::bag::reader::{for_each_message, read_metadata, reindex};
 use serde_json::json;
 
+use crate::topics::namespace_of;
+
 /// Read a recorded session from its bag alone: info, episodes, replay, export, render, reindex;
 /// or play it back into a running ROS graph.
 ///
@@ -421,14 +423,6 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
         }
     }
     Ok(found)
-}
-
-/// The namespace of a topic (`/env_00/reward` → `/env_00`, `/reward` → `/`).
-pub fn namespace_of(topic: &str) -> String {
-    match topic.rsplit_once('/') {
-        Some(("", _)) | None => "/".into(),
-        Some((ns, _)) => ns.into(),
-    }
 }
 
 /// The table as CSV (one header line).

@@ -16,7 +16,7 @@ use composuite_msgs::msg;
 use composuite_ros::bag::reader::for_each_message;
 use composuite_ros::shared::convert;
 
-use crate::bag::namespace_of;
+use crate::topics::namespace_of;
 use crate::video::{VideoFormat, VideoWriter};
 
 /// What to render and how.

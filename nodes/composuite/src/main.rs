@@ -18,6 +18,7 @@ mod plots;
 mod replay;
 mod session;
 mod tasks;
+mod topics;
 mod video;
 
 use clap::{Parser, Subcommand};

@@ -21,7 +21,7 @@ use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_ros::bag::reader::for_each_message;
 use composuite_ros::shared::convert;
 
-use crate::bag::namespace_of;
+use crate::topics::namespace_of;
 
 /// What one recorded episode holds.
 struct Recorded {

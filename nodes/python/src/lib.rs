@@ -11,6 +11,7 @@
 
 mod dataset;
 mod render;
+mod task;
 
 use composuite_core::TaskSpec;
 use composuite_core::axes::AxisElement;
@@ -22,6 +23,8 @@ use numpy::prelude::*;
 use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
 use pyo3::exceptions::{PyIndexError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
+
+use task::parse_task;
 
 /// `modes[i]`: environment i is left as it is.
 const MODE_IDLE: u8 = 0;
@@ -103,11 +106,6 @@ impl OutputBuffers {
         };
         Ok(f(&mut out))
     }
-}
-
-fn parse_task(task: &str) -> PyResult<TaskSpec> {
-    task.parse::<TaskSpec>()
-        .map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// A refused command as the Python exception that fits it: bad values are a `ValueError`,

@@ -1,36 +1,17 @@
-//! The suite's three nodes by kind: their specs (name, help, parameters) and mains, shared by
-//! the `*_node` binaries and `composuite launch` (which runs each node as `composuite node KIND`).
+//! The suite's nodes by kind: their specs (name, help, parameters) and mains, shared by the
+//! `*_node` binaries and `composuite launch` (which runs each node as `composuite node KIND`).
+//! The kinds themselves are in `shared::node_kind`, where the interfaces the nodes serve can
+//! name them without depending on the nodes.
 
-use std::fmt;
 use std::process::ExitCode;
 
 use crate::shared::node::{NodeSpec, RosNode, run_node};
+pub use crate::shared::node_kind::NodeKind;
 
 /// A node's main loop: runs on a started node until the channel delivers a stop.
 pub type NodeBody = fn(&mut RosNode, async_channel::Receiver<i32>) -> Result<(), String>;
 
-/// One of the suite's nodes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NodeKind {
-    /// Physics, joint states, observations.
-    Sim,
-    /// Scenes, episodes, services.
-    TaskManager,
-    /// Staged rewards and success.
-    Reward,
-    /// Records topics into a rosbag2 bag (not part of an environment: one per suite).
-    Recorder,
-}
-
 impl NodeKind {
-    /// Every node of an environment, in start order (the task manager's latched scene first).
-    pub const ALL: [NodeKind; 3] = [NodeKind::TaskManager, NodeKind::Sim, NodeKind::Reward];
-
-    /// The node's default name (`sim`, `task_manager`, `reward`).
-    pub fn name(self) -> &'static str {
-        self.spec().name
-    }
-
     /// `sim` / `task_manager` / `reward` / `recorder` (and `*_node`).
     pub fn parse(s: &str) -> Option<NodeKind> {
         NodeKind::ALL
@@ -65,14 +46,8 @@ impl NodeKind {
     }
 }
 
-impl fmt::Display for NodeKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
 const SIM: NodeSpec = NodeSpec {
-    name: "sim",
+    name: NodeKind::Sim.name(),
     binary: "sim_node",
     about: "CompoSuite-ROS sim node: owns the physics world of one environment; steps it on \
             joint_command or reference_action (lockstep) or on the wall clock (realtime); \
@@ -83,7 +58,7 @@ const SIM: NodeSpec = NodeSpec {
 };
 
 const TASK_MANAGER: NodeSpec = NodeSpec {
-    name: "task_manager",
+    name: NodeKind::TaskManager.name(),
     binary: "task_manager_node",
     about: "CompoSuite-ROS task manager node: composes and publishes the scene (one per \
             episode), follows episodes and publishes episode; serves set_task, reset and \
@@ -92,7 +67,7 @@ const TASK_MANAGER: NodeSpec = NodeSpec {
 };
 
 const REWARD: NodeSpec = NodeSpec {
-    name: "reward",
+    name: NodeKind::Reward.name(),
     binary: "reward_node",
     about: "CompoSuite-ROS reward node: the staged reward of every step (from scene + \
             world_state) on reward, and the success flag on success.",
@@ -100,7 +75,7 @@ const REWARD: NodeSpec = NodeSpec {
 };
 
 const RECORDER: NodeSpec = NodeSpec {
-    name: "recorder",
+    name: NodeKind::Recorder.name(),
     binary: "recorder_node",
     about: "CompoSuite-ROS recorder node: records topics from the wire (all, a list or a \
             regex, as `ros2 bag record`) into a rosbag2 directory with MCAP storage: \

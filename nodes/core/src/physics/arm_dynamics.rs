@@ -9,8 +9,7 @@
 
 use nalgebra::{Isometry3, Matrix3, SMatrix, Vector3};
 
-use super::robot_model::{MAX_BODIES, RobotModel};
-use super::world::ARM_DOF;
+use super::robot_model::{ARM_DOF, MAX_BODIES, RobotModel};
 
 /// M(q) and the bias torques of the 7 arm joints.
 #[derive(Debug, Clone, PartialEq)]

@@ -9,19 +9,20 @@ mod params;
 mod robot_model;
 mod tags;
 mod torsion;
-mod urdf_capsule;
+mod urdf;
 mod world;
 
 pub use arm_dynamics::{ArmDynamics, ArmState, arm_dynamics};
 pub use params::{ArmGains, GripperParams, PhysicsParams};
-pub(crate) use robot_model::urdf_pose;
 pub use robot_model::{
-    BodyModel, CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, JointModel,
-    LinkJoint, ModelError, RobotModel, Shape, build_model, robot_description, robot_model,
+    ARM_DOF, BodyModel, CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind,
+    JointModel, LinkJoint, RobotModel, Shape, build_model, robot_description, robot_model,
 };
 pub use tags::{ColliderTag, Side};
 pub use torsion::TorsionalFriction;
+pub use urdf::ModelError;
+pub(crate) use urdf::urdf_pose;
 pub use world::{
-    ARM_DOF, ArmHandles, FINGER_OPEN, FingerContacts, GripperCommand, ServoMode, SimWorld,
-    finger_for_gap, from_pose, pad_gap, to_pose,
+    ArmHandles, FINGER_OPEN, FingerContacts, GripperCommand, ServoMode, SimWorld, finger_for_gap,
+    from_pose, pad_gap, to_pose,
 };

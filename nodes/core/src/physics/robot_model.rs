@@ -8,9 +8,9 @@
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
-use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Vector3};
 
-use super::urdf_capsule::join_capsules;
+use super::urdf::{ModelError, join_capsules, urdf_pose};
 use crate::axes::{AxisElement, Robot};
 
 /// The URDF texts, compiled in so the binaries do not depend on the working directory.
@@ -22,6 +22,9 @@ fn urdf_text(robot: Robot) -> &'static str {
         Robot::Panda => include_str!("../../../../urdf/panda.urdf"),
     }
 }
+
+/// Number of arm joints.
+pub const ARM_DOF: usize = 7;
 
 const GRIPPER_URDF: &str = include_str!("../../../../urdf/rethink_gripper.urdf");
 /// The arm link the gripper's root is mounted on, with an identity pose.
@@ -148,18 +151,6 @@ pub struct LinkJoint {
     pub fixed: bool,
 }
 
-/// A URDF that does not describe what the loader needs.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ModelError(pub String);
-
-impl std::fmt::Display for ModelError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for ModelError {}
-
 /// The cached model of an arm with its gripper (parsed on first use).
 pub fn robot_model(robot: Robot) -> &'static RobotModel {
     static CACHE: [OnceLock<RobotModel>; 4] = [
@@ -172,15 +163,6 @@ pub fn robot_model(robot: Robot) -> &'static RobotModel {
         build_model(robot, urdf_text(robot), GRIPPER_URDF)
             .unwrap_or_else(|e| panic!("the shipped URDF of {robot:?} is invalid: {e}"))
     })
-}
-
-pub(crate) fn urdf_pose(pose: &urdf_rs::Pose) -> Isometry3<f64> {
-    let [x, y, z] = *pose.xyz;
-    let [roll, pitch, yaw] = *pose.rpy;
-    Isometry3::from_parts(
-        Translation3::new(x, y, z),
-        UnitQuaternion::from_euler_angles(roll, pitch, yaw),
-    )
 }
 
 /// One URDF of the arm with its gripper mounted, as `robot_description` carries it for RViz

@@ -7,16 +7,13 @@ use rapier3d::prelude::*;
 use super::arm_dynamics::{ArmDynamics, ArmState, arm_dynamics};
 use super::params::{ArmGains, GripperParams, PhysicsParams};
 use super::robot_model::{
-    CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, MAX_BODIES, RobotModel,
-    Shape, robot_model,
+    ARM_DOF, CollisionShape, FINGER_JOINTS, GRIP_SITE_LINK, HAND_LINK, JointKind, MAX_BODIES,
+    RobotModel, Shape, robot_model,
 };
 use super::tags::{ColliderTag, Side};
 use super::torsion::TorsionalFriction;
 use crate::arena::{Placed, Primitive, merged_solids, object_geometry, robot_base_pose};
 use crate::axes::{Object, Robot};
-
-/// Number of arm joints.
-pub const ARM_DOF: usize = 7;
 
 /// How the gripper is being commanded.
 #[derive(Debug, Clone, Copy, PartialEq)]

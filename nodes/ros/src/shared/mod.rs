@@ -18,6 +18,7 @@ pub mod environment;
 pub mod intra_process;
 pub mod names;
 pub mod node;
+pub mod node_kind;
 pub mod param_server;
 pub mod params;
 pub mod qos;

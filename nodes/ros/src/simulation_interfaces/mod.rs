@@ -16,8 +16,8 @@ pub mod worlds;
 
 use composuite_msgs::simulation_interfaces::msg::{Result as SimResult, SimulatorFeatures as F};
 
-use crate::nodes::NodeKind;
 use crate::shared::names;
+use crate::shared::node_kind::NodeKind;
 
 /// One interface of the standard the suite serves.
 #[derive(Debug, Clone, Copy)]

@@ -1,15 +1,36 @@
-//! Capsules written in standard URDF, joined back into capsules for the physics.
+//! URDF as the physics reads it: poses, capsules joined back, and the error a file that does
+//! not fit gives.
 //!
+//! Capsules are written in standard URDF and joined back into capsules for the physics.
 //! URDF has no capsule, and parsers that keep to the standard (urdfdom under RViz, Foxglove,
 //! yourdfpy) refuse one, so the URDFs write each capsule as what it is made of: a `<cylinder>`
 //! collision named `N` and two `<sphere>` collisions `N_end1`, `N_end2` of the same radius,
 //! centred on the cylinder's end faces. The loader turns each such trio back into one capsule,
 //! which rapier handles better than the three pieces, and refuses a trio that does not fit.
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-use super::ModelError;
-use super::robot_model::urdf_pose;
+/// A URDF that does not describe what the loader needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelError(pub String);
+
+impl std::fmt::Display for ModelError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ModelError {}
+
+/// A URDF `origin` as an isometry (xyz, then roll-pitch-yaw as URDF defines them).
+pub(crate) fn urdf_pose(pose: &urdf_rs::Pose) -> Isometry3<f64> {
+    let [x, y, z] = *pose.xyz;
+    let [roll, pitch, yaw] = *pose.rpy;
+    Isometry3::from_parts(
+        Translation3::new(x, y, z),
+        UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+    )
+}
 
 /// How far (m) a sphere's centre may be from its end face's centre: the files give 6 decimals.
 const END_TOLERANCE: f64 = 1e-5;
