@@ -4,8 +4,8 @@
     composuite-dataset generate --out data --robot IIWA --objective PickPlace --transitions 100000
     composuite-dataset generate --out data --split split_0.json --split-part train
     composuite-dataset verify data/random/IIWA_Box_None_PickPlace/data.hdf5
-    python examples/ppo_train.py --dataset-out run.hdf5 ... && \
-        composuite-dataset subsample run.hdf5 --out data --transitions 1000000
+    python examples/ppo_train.py --dataset-out run.hdf5 ...   # a learner's run, then:
+    composuite-dataset subsample run.hdf5 --out data --transitions 1000000
     composuite-dataset from-bag runs/s1/bag --out data
     composuite-dataset info data/random/IIWA_Box_None_PickPlace
 """
