@@ -10,16 +10,22 @@ fn config(horizon: u32) -> EnvConfig {
     EnvConfig::default().horizon(horizon)
 }
 
-fn collect(name: &str, horizon: u32, threads: usize, episodes: usize, rows: usize) -> Chunk {
-    let mut collector = Collector::new(
+/// A random-policy collector of `name` with `horizon`, from `first_seed`, on `threads` threads.
+fn random_collector(name: &str, horizon: u32, first_seed: u64, threads: usize) -> Collector {
+    Collector::new(
         task(name),
         config(horizon),
         DatasetPolicy::Random,
-        5,
+        first_seed,
         threads,
     )
-    .unwrap();
-    collector.collect(episodes, rows).unwrap()
+    .unwrap()
+}
+
+fn collect(name: &str, horizon: u32, threads: usize, episodes: usize, rows: usize) -> Chunk {
+    random_collector(name, horizon, 5, threads)
+        .collect(episodes, rows)
+        .unwrap()
 }
 
 #[test]
@@ -59,14 +65,7 @@ fn rows_do_not_depend_on_threads_or_on_how_the_calls_are_split() {
     let one = collect("Panda/box/goal_wall/push", 15, 1, 9, 1000);
     let two = collect("Panda/box/goal_wall/push", 15, 2, 9, 1000);
     assert_eq!(one, two);
-    let mut collector = Collector::new(
-        task("Panda/box/goal_wall/push"),
-        config(15),
-        DatasetPolicy::Random,
-        5,
-        2,
-    )
-    .unwrap();
+    let mut collector = random_collector("Panda/box/goal_wall/push", 15, 5, 2);
     let mut rows = Rows::new(93);
     let mut seeds = Vec::new();
     for _ in 0..3 {
@@ -84,14 +83,7 @@ fn rows_do_not_depend_on_threads_or_on_how_the_calls_are_split() {
 
 #[test]
 fn a_row_budget_inside_an_episode_ends_it_as_a_timeout_and_the_next_call_goes_on() {
-    let mut collector = Collector::new(
-        task("IIWA/dumbbell/no_obstacle/trash_can"),
-        config(10),
-        DatasetPolicy::Random,
-        0,
-        2,
-    )
-    .unwrap();
+    let mut collector = random_collector("IIWA/dumbbell/no_obstacle/trash_can", 10, 0, 2);
     let chunk = collector.collect(100, 25).unwrap();
     assert_eq!(chunk.rows.len(), 25);
     let starts: Vec<(usize, u64)> = chunk.episodes.iter().map(|e| (e.row, e.seed)).collect();
@@ -102,14 +94,7 @@ fn a_row_budget_inside_an_episode_ends_it_as_a_timeout_and_the_next_call_goes_on
     let next = collector.collect(1, 100).unwrap();
     assert_eq!(next.episodes, [EpisodeStart { row: 0, seed: 3 }]);
     // The cut episode's rows are the first rows of the whole episode.
-    let mut from_zero = Collector::new(
-        task("IIWA/dumbbell/no_obstacle/trash_can"),
-        config(10),
-        DatasetPolicy::Random,
-        0,
-        1,
-    )
-    .unwrap();
+    let mut from_zero = random_collector("IIWA/dumbbell/no_obstacle/trash_can", 10, 0, 1);
     let full = from_zero.collect(3, 1000).unwrap();
     assert_eq!(full.rows.rewards[..25], chunk.rows.rewards[..]);
     assert_eq!(
@@ -184,14 +169,7 @@ fn policies_parse_by_name_and_name_the_valid_ones() {
 
 #[test]
 fn seeds_past_the_references_range_are_refused() {
-    let mut collector = Collector::new(
-        task("IIWA/box/no_obstacle/push"),
-        config(5),
-        DatasetPolicy::Random,
-        crate::env::MAX_SEED,
-        1,
-    )
-    .unwrap();
+    let mut collector = random_collector("IIWA/box/no_obstacle/push", 5, crate::env::MAX_SEED, 1);
     let chunk = collector.collect(1, 100).unwrap();
     assert_eq!(chunk.episodes[0].seed, crate::env::MAX_SEED);
     let err = collector.collect(1, 100).unwrap_err();
