@@ -6,14 +6,13 @@
 use composuite_core::TaskSpec;
 use composuite_core::all_tasks;
 use composuite_core::dataset::{self, ACTION_SIZE, DatasetPolicy, Rows};
-use composuite_core::env::EnvConfig;
 use numpy::prelude::*;
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::task::parse_task;
+use crate::task::{env_config, parse_task};
 
 /// Rows as a dict of numpy arrays named as the files' keys.
 fn rows_dict<'py>(py: Python<'py>, rows: Rows) -> PyResult<Bound<'py, PyDict>> {
@@ -31,13 +30,6 @@ fn rows_dict<'py>(py: Python<'py>, rows: Rows) -> PyResult<Bound<'py, PyDict>> {
     dict.set_item("timeouts", PyArray1::from_vec(py, rows.timeouts))?;
     dict.set_item("successes", PyArray1::from_vec(py, rows.successes))?;
     Ok(dict)
-}
-
-fn env_config(horizon: u32) -> PyResult<EnvConfig> {
-    if horizon == 0 {
-        return Err(PyValueError::new_err("horizon must be at least 1 step"));
-    }
-    Ok(EnvConfig::default().horizon(horizon))
 }
 
 /// Episodes of one task played by a built-in policy (`random`), seed after seed from

@@ -16,7 +16,7 @@ mod task;
 use composuite_core::TaskSpec;
 use composuite_core::axes::AxisElement;
 use composuite_core::batch::{BatchCommand, BatchError, BatchOutput, EnvBatch, MAX_STAGES};
-use composuite_core::env::{Action, EnvConfig, EnvError};
+use composuite_core::env::{Action, EnvError};
 use composuite_core::physics::{ARM_DOF, pad_gap};
 use composuite_core::rng::{MT_STATE_WORDS, Mt19937};
 use numpy::prelude::*;
@@ -24,7 +24,7 @@ use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
 use pyo3::exceptions::{PyIndexError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
-use task::parse_task;
+use task::{env_config, parse_task};
 
 /// `modes[i]`: environment i is left as it is.
 const MODE_IDLE: u8 = 0;
@@ -151,9 +151,7 @@ impl Batch {
                 )));
             }
         };
-        if horizon == 0 {
-            return Err(PyValueError::new_err("horizon must be at least 1 step"));
-        }
+        let config = env_config(horizon)?;
         if !reward_scale.is_finite() {
             return Err(PyValueError::new_err(format!(
                 "reward_scale is {reward_scale}; it must be a finite number"
@@ -163,8 +161,7 @@ impl Batch {
             .iter()
             .map(|t| parse_task(t))
             .collect::<PyResult<Vec<_>>>()?;
-        let config = EnvConfig::default()
-            .horizon(horizon)
+        let config = config
             .task_observation(use_task_id_obs)
             .reward_shaping(reward_shaping)
             .reward_scale(reward_scale);

@@ -1,6 +1,7 @@
-//! Task names from Python, as the core parses them.
+//! Task names and episode settings from Python, checked as the core takes them.
 
 use composuite_core::TaskSpec;
+use composuite_core::env::EnvConfig;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -9,4 +10,12 @@ use pyo3::prelude::*;
 pub fn parse_task(task: &str) -> PyResult<TaskSpec> {
     task.parse::<TaskSpec>()
         .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// The default settings with `horizon` control steps an episode; a `ValueError` for 0.
+pub fn env_config(horizon: u32) -> PyResult<EnvConfig> {
+    if horizon == 0 {
+        return Err(PyValueError::new_err("horizon must be at least 1 step"));
+    }
+    Ok(EnvConfig::default().horizon(horizon))
 }

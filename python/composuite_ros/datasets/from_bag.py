@@ -12,6 +12,7 @@ stamped action stamped before its episode began is dropped, as the sim drops it.
 
 from __future__ import annotations
 
+import bisect
 import os
 from collections import defaultdict
 from dataclasses import dataclass, field
@@ -100,10 +101,12 @@ def read_episodes(bag: str | os.PathLike) -> list[Episode]:
     for ns, sent in commands.items():
         starts = sorted((e.observations[0][0], e.number) for e in episodes.values()
                         if e.namespace == ns)
+        times = [start for start, _ in starts]
         for command in sorted(sent, key=lambda c: c[0]):
-            owner = [number for start, number in starts if start < command[0]]
-            if owner:
-                episodes[(ns, owner[-1])].commands.append(command)
+            # The last episode whose step-0 observation was published before the command.
+            owner = bisect.bisect_left(times, command[0]) - 1
+            if owner >= 0:
+                episodes[(ns, starts[owner][1])].commands.append(command)
     return [episodes[k] for k in sorted(episodes)]
 
 

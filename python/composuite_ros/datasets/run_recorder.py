@@ -21,7 +21,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .generate import suite_provenance
+from .generate import FORMAT, suite_provenance
 from .layout import DatasetError, names_of, task_file
 from .writer import ACTION_SIZE, OBSERVATION_SIZE, ROW_KEYS, DatasetWriter, _h5py
 
@@ -148,7 +148,7 @@ def subsample(run: str | os.PathLike, root: str | os.PathLike, transitions: int,
             raise DatasetError(f"{path} exists; pass --overwrite to replace it")
         attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()
                  if k not in ("kind", "episodes")}
-        attrs.update({"format": "composuite-ros offline dataset v1", "dataset_type": dataset_type,
+        attrs.update({"format": FORMAT, "dataset_type": dataset_type,
                       "transitions": transitions, "subsample_seed": seed,
                       "subsampled_from": f"{Path(run).name}: {total:,} rows, "
                                          f"{len(starts):,} episodes",

@@ -9,7 +9,7 @@ use crate::env::{Action, Env, EnvConfig, EnvError, MAX_SEED, sample_object_start
 use crate::obs::flat_size;
 
 use super::policy::{ActionSource, DatasetPolicy, StoredActions};
-use super::rows::{ACTION_SIZE, Rows};
+use super::rows::Rows;
 
 /// Episodes a collector plays at once per thread: more than one, so a thread that finishes a
 /// short episode (Push ends early) takes another instead of waiting for the round to end.
@@ -146,23 +146,19 @@ impl Collector {
                     row: chunk.rows.len(),
                     seed,
                 });
-                if played.rows.len() < left {
-                    chunk.rows.append(&played.rows);
-                    chunk
-                        .final_observations
-                        .extend_from_slice(&played.final_observation);
-                    continue;
-                }
-                // The budget ends inside (or exactly at the end of) this episode: keep its
+                // Where the budget ends inside (or exactly at the end of) this episode, keep its
                 // first `left` rows — what playing with that budget gives — and hand the seeds
                 // after it back, unplayed.
+                let budget_ends = played.rows.len() >= left;
                 let (rows, final_observation) = cut(played, left);
                 chunk.rows.append(&rows);
                 chunk
                     .final_observations
                     .extend_from_slice(&final_observation);
-                self.next_seed = seed + 1;
-                return Ok(chunk);
+                if budget_ends {
+                    self.next_seed = seed + 1;
+                    return Ok(chunk);
+                }
             }
         }
         Ok(chunk)
@@ -199,12 +195,7 @@ fn cut(played: Played, n: usize) -> (Rows, Vec<f32>) {
     }
     let size = rows.observation_size;
     let next = rows.observations[n * size..(n + 1) * size].to_vec();
-    rows.observations.truncate(n * size);
-    rows.actions.truncate(n * ACTION_SIZE);
-    rows.rewards.truncate(n);
-    rows.terminals.truncate(n);
-    rows.timeouts.truncate(n);
-    rows.successes.truncate(n);
+    rows.truncate(n);
     rows.timeouts[n - 1] = 1;
     (rows, next)
 }

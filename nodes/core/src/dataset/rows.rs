@@ -56,6 +56,16 @@ impl Rows {
         self.successes.extend_from_slice(&other.successes);
     }
 
+    /// Keep the first `n` rows (all of them when there are fewer).
+    pub fn truncate(&mut self, n: usize) {
+        self.observations.truncate(n * self.observation_size);
+        self.actions.truncate(n * ACTION_SIZE);
+        self.rewards.truncate(n);
+        self.terminals.truncate(n);
+        self.timeouts.truncate(n);
+        self.successes.truncate(n);
+    }
+
     /// Add one row.
     pub(super) fn push(
         &mut self,
