@@ -100,6 +100,11 @@ def rust_text(relative: str) -> str:
     return re.sub(r"//[^\n]*", "", (REPO / relative).read_text())
 
 
+def sorted_rs(relative_dir: str) -> list[str]:
+    """The `.rs` files of a source folder of the repository, relative paths in name order."""
+    return sorted(str(p.relative_to(REPO)) for p in (REPO / relative_dir).glob("*.rs"))
+
+
 def rust_expr(text: str, start: int) -> str:
     """The Rust expression that starts at `text[start:]`: up to the `,` or `;` (or the closing
     bracket of an enclosing list or call) that ends it."""
@@ -229,7 +234,8 @@ class Rig:
 def read_rig(arms: list[str]) -> Rig:
     core = "nodes/core/src"
     params = rust_text(f"{core}/physics/params.rs")
-    world = rust_text(f"{core}/physics/world.rs")
+    # SimWorld is split by job over physics/world/*.rs; what is read here may sit in any of them.
+    world = "\n".join(rust_text(path) for path in sorted_rs(f"{core}/physics/world"))
     robot_model = rust_text(f"{core}/physics/robot_model.rs")
     robot = rust_text(f"{core}/axes/robot.rs")
     bins = rust_text(f"{core}/arena/bins.rs")
@@ -247,7 +253,7 @@ def read_rig(arms: list[str]) -> Rig:
     frictions = find(
         world,
         r"matches!\(tag, ColliderTag::Arm\(_\)\)\s*\{\s*([\d.]+)\s*\}\s*else\s*\{\s*([\d.]+)\s*\}",
-        "world.rs",
+        "physics/world/",
     )
 
     # The PickPlace arena without obstacle: bin 1 and bin 2 only.
@@ -302,8 +308,8 @@ def read_rig(arms: list[str]) -> Rig:
         mount_link=const(robot_model, "GRIPPER_MOUNT_LINK", "robot_model.rs"),
         gripper_root=const(robot_model, "GRIPPER_ROOT_LINK", "robot_model.rs"),
         finger_joints=const(robot_model, "FINGER_JOINTS", "robot_model.rs"),
-        finger_open=const(world, "FINGER_OPEN", "world.rs"),
-        finger_coupling=field_after(world, "MultibodyDofCoupling {", "coeff", "world.rs"),
+        finger_open=const(world, "FINGER_OPEN", "physics/world/"),
+        finger_coupling=field_after(world, "MultibodyDofCoupling {", "coeff", "physics/world/"),
         finger_gains={
             k: field_after(params, gripper, k, "params.rs")
             for k in ["kp", "kd", "max_force", "frictionloss"]

@@ -41,7 +41,7 @@ pub use scalar_type::ScalarType;
 pub use simd_real_copy::SimdRealCopy;
 pub use simd_select::SimdSelect;
 #[cfg(feature = "alloc")]
-pub(crate) use reused_vector::{copy_in_place, zero_in_place};
+pub(crate) use reused_vector::zero_in_place;
 
 #[cfg(not(target_arch = "spirv"))]
 pub use angular_inertia_ops::AngularInertiaOps;

@@ -62,12 +62,3 @@ pub(crate) fn zero_in_place(vector: &mut DVector, len: usize) {
         *vector = DVector::zeros(len);
     }
 }
-
-/// `to` as a copy of `from`.
-pub(crate) fn copy_in_place(to: &mut DVector, from: &DVector) {
-    if to.len() == from.len() {
-        to.as_mut_slice().copy_from_slice(from.as_slice()); // a memcpy
-    } else {
-        *to = from.clone();
-    }
-}

@@ -15,7 +15,7 @@ impl SimWorld {
         self.arm.link_ids[j]
     }
 
-    fn multibody(&self) -> &Multibody {
+    pub(super) fn multibody(&self) -> &Multibody {
         self.physics
             .multibody_joints
             .get(self.arm.joints[0])

@@ -12,6 +12,9 @@ use crate::geometry::{
 use crate::math::Real;
 use parry::partitioning::BvhLeafUpdateStatus;
 
+/// CompoSuite-ROS patch: below this many leaves the optimizer runs at most every 8th frame.
+const SMALL_TREE_LEAVES: usize = 64;
+
 impl BroadPhaseBvh {
     /// Updates the broad-phase.
     ///
@@ -260,8 +263,13 @@ impl BroadPhaseBvh {
         self.changes_since_optimize = self
             .changes_since_optimize
             .saturating_add(removed_colliders.len() as u32);
+        // CompoSuite-ROS patch: a tree of fewer than `SMALL_TREE_LEAVES` leaves (an arm, its
+        // gripper and an arena: ~30) is optimised at most every 8th frame, like a moderate
+        // change volume: rebuilding its subtrees every frame cost ~5 % of a physics step, and
+        // a small tree's quality changes which pairs are tested little (the pairs found are
+        // the same; only the order they are found in differs).
         let run_optimizer = self.changes_since_optimize > 0
-            && (num_updated * 16 >= leaf_count
+            && ((num_updated * 16 >= leaf_count && leaf_count >= SMALL_TREE_LEAVES)
                 || (self.frame_index % 8 == 0
                     && self.changes_since_optimize as usize * 64 >= leaf_count))
             && self.optimization_strategy == BvhOptimizationStrategy::SubtreeOptimizer;

@@ -23,11 +23,16 @@ mod multibody_joint_handle;
 mod multibody_joint_set;
 #[cfg(feature = "alloc")]
 mod multibody_link;
-// CompoSuite-ROS patch: the mass matrix's LU kept in the multibody.
+// CompoSuite-ROS patch: the mass matrix's Cholesky factorisation kept in the multibody, the
+// CRBA and Newton–Euler pieces, and the joint-space controller that reuses them.
 #[cfg(feature = "alloc")]
-mod multibody_lu;
+mod multibody_cholesky;
 #[cfg(feature = "alloc")]
-pub use self::multibody_lu::MultibodyLu;
+pub use self::multibody_cholesky::MultibodyCholesky;
+#[cfg(feature = "alloc")]
+mod multibody_dynamics;
+#[cfg(feature = "alloc")]
+pub use self::multibody_dynamics::ComputedTorquePd;
 #[cfg(feature = "alloc")]
 mod multibody_workspace;
 

@@ -1,5 +1,6 @@
+use super::multibody_cholesky::MultibodyCholesky;
+use super::multibody_dynamics::{Composite, ComputedTorquePd, Wrench};
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
-use super::multibody_lu::MultibodyLu;
 use super::multibody_workspace::MultibodyWorkspace;
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
@@ -8,15 +9,11 @@ use crate::dynamics::{
     IntegrationParameters, RigidBodyHandle, RigidBodySet, RigidBodyType, RigidBodyVelocity,
 };
 use crate::math::{
-    ANG_DIM, AngDim, AngVector, AngularInertia, DIM, DVector, Dim, Jacobian, Pose, Real,
-    SPATIAL_DIM, SimdAngVector, Vector,
+    ANG_DIM, AngVector, AngularInertia, DIM, DVector, Jacobian, Pose, Real, SPATIAL_DIM, Vector,
 };
 use crate::prelude::MultibodyJoint;
-#[cfg(feature = "dim3")]
-use crate::utils::mat_to_na;
 use crate::utils::{AngularInertiaOps, CrossProduct, CrossProductMatrix, IndexMut2, vect_to_na};
-use crate::utils::{copy_in_place, zero_in_place};
-use na::{self, DMatrix, DVectorView, DVectorViewMut, Dyn, OMatrix, SMatrix, SVector, StorageMut};
+use na::{self, DMatrix, DVectorView, DVectorViewMut, Dyn, SMatrix, SVector, StorageMut};
 
 #[cfg(doc)]
 use crate::prelude::{GenericJoint, RigidBody};
@@ -29,22 +26,9 @@ struct Force {
 }
 
 impl Force {
-    fn new(linear: Vector, angular: AngVector) -> Self {
-        Self { linear, angular }
-    }
-
     fn as_vector(&self) -> &SVector<Real, SPATIAL_DIM> {
         unsafe { core::mem::transmute(self) }
     }
-}
-
-#[cfg(feature = "dim2")]
-fn concat_rb_mass_matrix(mass: Vector, inertia: Real) -> SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM> {
-    let mut result = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
-    result[(0, 0)] = mass.x;
-    result[(1, 1)] = mass.y;
-    result[(2, 2)] = inertia;
-    result
 }
 
 /// CompoSuite-ROS patch: `y[:, j] = f(b[:, j], y[:, j])` for every column j of the 3-row `y`
@@ -133,190 +117,12 @@ fn gemm3<RY: na::Dim, RB: na::Dim, SY, SB>(
     });
 }
 
-/// CompoSuite-ROS patch: `gemm3(y, 1, a[0], b, 1)`, then `gemm3(y, 1, a[1], b, 1)`, … in one pass
-/// over the columns: each column of `b` is read and spread into lanes once, and each product is
-/// added to the entries in the order the separate calls add them (`alpha = 1` scales nothing,
-/// `beta = 1` neither), so the result is the same bit for bit.
-#[cfg(feature = "dim3")]
+/// CompoSuite-ROS patch: column `dof` of a body Jacobian as a twist: the velocity of the body's
+/// centre of mass and its angular velocity for a unit rate of that DoF.
 #[inline]
-fn gemm3_sum<RY: na::Dim, RB: na::Dim, SY, SB, const K: usize>(
-    y: &mut na::Matrix<Real, RY, Dyn, SY>,
-    a: [&na::Matrix3<Real>; K],
-    b: &na::Matrix<Real, RB, Dyn, SB>,
-) where
-    SY: StorageMut<Real, RY, Dyn>,
-    SB: na::Storage<Real, RB, Dyn>,
-{
-    use wide::f32x4;
-    let columns = a.map(lane_columns);
-    map_columns3(y, b, |column, mut v| {
-        let [b0, b1, b2] = column.map(f32x4::splat);
-        for [s0, s1, s2] in &columns {
-            v = *s0 * b0 + v;
-            v = *s1 * b1 + v;
-            v = *s2 * b2 + v;
-        }
-        v
-    });
-}
-
-/// CompoSuite-ROS patch: one link's share of both mass matrices, in one pass.
-///
-/// The release added, per link, `Jᵀ·M·J` to the plain matrix and `Jᵀ·M'·J` to the semi-implicit
-/// one (nalgebra's `quadform`; `M'` has the gyroscopic derivative in its inertia block), then
-/// `Jᵀ·C` to the semi-implicit one (`gemm_tr`; `C` the link's Coriolis rows times `dt`). This
-/// computes every entry with the same operations in the same order — nalgebra's `gemv_tr` sums
-/// a 6-long dot product as `((((0 + p0) + p1) + p2) + p3) + p4) + p5` and adds it to the entry;
-/// `gemm_tr`'s dot is summed the same way — so the results are the same bit for bit. What it
-/// saves: the products by `M`'s zero blocks, the linear rows' partial sum (the same in `M` and
-/// `M'`), nalgebra's generic loops, and four entries of a column at once (`f32x4`: each lane
-/// runs the scalar operations, so the lanes are exact too). `rows` and `factors` are kept
-/// workspaces: `J` transposed (the lanes of a column contiguous), and per column of `J` what
-/// its rows are multiplied by, already in four lanes.
-#[cfg(feature = "dim3")]
-#[allow(clippy::too_many_arguments)]
-fn add_link_mass_terms(
-    plain: &mut DMatrix<Real>,
-    semi_implicit: &mut DMatrix<Real>,
-    jacobian: &Jacobian<Real>,
-    coriolis_dt: &Jacobian<Real>,
-    width: usize,
-    plain_mass: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
-    semi_implicit_mass: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>,
-    rows: &mut Vec<Real>,
-    factors: &mut Vec<wide::f32x4>,
-) {
-    use wide::f32x4;
-    const LANES: usize = 4;
-    let (pm, am) = (plain_mass, semi_implicit_mass);
-    debug_assert!(
-        [pm, am]
-            .iter()
-            .all(|m| (0..SPATIAL_DIM).all(|r| (0..SPATIAL_DIM).all(|c| {
-                let linear_diagonal = r < DIM && c == r;
-                let angular_block = r >= DIM && c >= DIM;
-                linear_diagonal || angular_block || m[(r, c)] == 0.0
-            })))
-            && (0..DIM).all(|r| pm[(r, r)] == am[(r, r)]),
-        "block-diagonal spatial mass matrices with one diagonal linear block"
-    );
-    if width == 0 {
-        return;
-    }
-    // Per column j of `J`: the linear rows of `M·J[:, j]` (the same in `M'`), the angular rows
-    // of `M·J[:, j]` and of `M'·J[:, j]`, and `C[:, j]` (what `gemm_tr` dots with), each already
-    // in all four lanes.
-    const FACTORS: usize = 3 + 3 + 3 + SPATIAL_DIM;
-    let stride = width.div_ceil(LANES) * LANES;
-    rows.clear();
-    rows.resize(SPATIAL_DIM * stride, 0.0);
-    // Both are 6 × ndofs, column-major: column c is `[6c, 6c + 6)` of the slice.
-    let (jacobian, coriolis_dt) = (jacobian.as_slice(), coriolis_dt.as_slice());
-    for (r, row) in rows.chunks_exact_mut(stride).enumerate() {
-        for (c, value) in row[..width].iter_mut().enumerate() {
-            *value = jacobian[c * SPATIAL_DIM + r];
-        }
-    }
-    factors.clear();
-    for j in 0..width {
-        let at = j * SPATIAL_DIM;
-        let x: &[Real; SPATIAL_DIM] = jacobian[at..at + SPATIAL_DIM].try_into().unwrap();
-        let c: &[Real; SPATIAL_DIM] = coriolis_dt[at..at + SPATIAL_DIM].try_into().unwrap();
-        let angular = |m: &SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM>, r: usize| {
-            m[(r, 3)] * x[3] + m[(r, 4)] * x[4] + m[(r, 5)] * x[5]
-        };
-        let column: [Real; FACTORS] = [
-            pm[(0, 0)] * x[0],
-            pm[(1, 1)] * x[1],
-            pm[(2, 2)] * x[2],
-            angular(pm, 3),
-            angular(pm, 4),
-            angular(pm, 5),
-            angular(am, 3),
-            angular(am, 4),
-            angular(am, 5),
-            c[0],
-            c[1],
-            c[2],
-            c[3],
-            c[4],
-            c[5],
-        ];
-        factors.extend(column.map(f32x4::splat));
-    }
-    let n = plain.nrows();
-    for c0 in (0..width).step_by(LANES) {
-        let jr: [f32x4; SPATIAL_DIM] = core::array::from_fn(|r| {
-            let at = r * stride + c0;
-            let four: [Real; LANES] = rows[at..at + LANES].try_into().unwrap();
-            f32x4::from(four)
-        });
-        let count = LANES.min(width - c0);
-        for (j, f) in factors.chunks_exact(FACTORS).enumerate() {
-            let f: &[f32x4; FACTORS] = f.try_into().unwrap();
-            let mut lin = f32x4::ZERO + jr[0] * f[0];
-            lin = lin + jr[1] * f[1];
-            lin = lin + jr[2] * f[2];
-            let mut quad_plain = lin + jr[3] * f[3];
-            quad_plain = quad_plain + jr[4] * f[4];
-            quad_plain = quad_plain + jr[5] * f[5];
-            let mut quad_semi = lin + jr[3] * f[6];
-            quad_semi = quad_semi + jr[4] * f[7];
-            quad_semi = quad_semi + jr[5] * f[8];
-            let mut coriolis = f32x4::ZERO + jr[0] * f[9];
-            for r in 1..SPATIAL_DIM {
-                coriolis = coriolis + jr[r] * f[9 + r];
-            }
-            let at = j * n + c0;
-            add_lanes(&mut plain.as_mut_slice()[at..at + count], quad_plain, None);
-            add_lanes(
-                &mut semi_implicit.as_mut_slice()[at..at + count],
-                quad_semi,
-                Some(coriolis),
-            );
-        }
-    }
-}
-
-/// CompoSuite-ROS patch: `out = then + (first + out)` lane by lane over `out`'s (at most four)
-/// entries (`out = first + out` without `then`).
-#[cfg(feature = "dim3")]
-#[inline(always)]
-fn add_lanes(out: &mut [Real], first: wide::f32x4, then: Option<wide::f32x4>) {
-    let sum = |old: wide::f32x4| match then {
-        Some(then) => then + (first + old),
-        None => first + old,
-    };
-    if let Ok(four) = <&mut [Real; 4]>::try_from(&mut *out) {
-        *four = sum(wide::f32x4::from(*four)).to_array();
-    } else {
-        // The 1-3 entries of a last column group, one by one with the lanes' own operations: a
-        // vector load of a short copy on the stack would stall on store forwarding.
-        let first = first.to_array();
-        let then = then.map(|then| then.to_array());
-        for (i, entry) in out.iter_mut().enumerate() {
-            let partial = first[i] + *entry;
-            *entry = match then {
-                Some(then) => then[i] + partial,
-                None => partial,
-            };
-        }
-    }
-}
-
-#[cfg(feature = "dim3")]
-fn concat_rb_mass_matrix(
-    mass: Vector,
-    inertia: na::Matrix3<Real>,
-) -> SMatrix<Real, SPATIAL_DIM, SPATIAL_DIM> {
-    let mut result = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
-    result[(0, 0)] = mass.x;
-    result[(1, 1)] = mass.y;
-    result[(2, 2)] = mass.z;
-    result
-        .fixed_view_mut::<ANG_DIM, ANG_DIM>(DIM, DIM)
-        .copy_from(&inertia);
-    result
+fn twist(jacobian: &Jacobian<Real>, dof: usize) -> (Vector, Vector) {
+    let c = jacobian.column(dof);
+    (Vector::new(c[0], c[1], c[2]), Vector::new(c[3], c[4], c[5]))
 }
 
 /// A holonomic coupling between two generalized coordinates of a single
@@ -367,14 +173,17 @@ pub struct Multibody {
     //       move dofs from/to a format that matches the augmented mass.
     // TODO: use sparse matrices?
     augmented_mass: DMatrix<Real>,
-    // CompoSuite-ROS patch: factorised in place (`multibody_lu.rs`), not a new `LU` per step.
-    inv_augmented_mass: MultibodyLu,
+    // CompoSuite-ROS patch: factorised in place (`multibody_cholesky.rs`), not a new `LU` per
+    // step; the one factorisation the free accelerations and the constraints share.
+    inv_augmented_mass: MultibodyCholesky,
+    /// CompoSuite-ROS patch: the mass matrix proper (armature included; no damping or spring
+    /// terms), in the DoFs' own order: what `ComputedTorquePd` multiplies by.
+    mass_matrix: DMatrix<Real>,
+    /// CompoSuite-ROS patch: the joint-space controller run inside the step, if any.
+    computed_torque_pd: Option<ComputedTorquePd>,
     // The indexing sequence for moving all kinematics degrees of
     // freedoms to the end of the generalized coordinates vector.
     augmented_mass_indices: IndexSequence,
-
-    acc_augmented_mass: DMatrix<Real>,
-    acc_inv_augmented_mass: MultibodyLu,
 
     ndofs: usize,
     pub(crate) root_is_dynamic: bool,
@@ -389,42 +198,13 @@ pub struct Multibody {
      * Workspaces.
      */
     workspace: MultibodyWorkspace,
-    coriolis_v: Vec<OMatrix<Real, Dim, Dyn>>,
-    coriolis_w: Vec<OMatrix<Real, AngDim, Dyn>>,
-    i_coriolis_dt: Jacobian<Real>,
     /// CompoSuite-ROS patch: everything the last `forward_kinematics` read, bit for bit (see
     /// `forward_kinematics_if_changed`), and a workspace to compare it against.
     fk_inputs: Vec<u32>,
     fk_inputs_now: Vec<u32>,
-    /// CompoSuite-ROS patch: `M⁻¹·e_k` for every DoF k (column k), solved with
-    /// `inv_augmented_mass` whenever it is refactorised (see `solve_unit_row`).
-    inv_mass_columns: DMatrix<Real>,
-    /// CompoSuite-ROS patch: a link's body Jacobian transposed (`add_link_mass_terms`).
-    jacobian_rows: Vec<Real>,
-    /// CompoSuite-ROS patch: per column of that Jacobian, the factors `add_link_mass_terms`
-    /// multiplies its rows by, in four lanes each.
-    #[cfg_attr(feature = "serde-serialize", serde(skip))]
-    jacobian_factors: Vec<wide::f32x4>,
     /// CompoSuite-ROS patch: each link body's world angular inertia (an inverse of its inverse)
     /// as `update_dynamics` found it, for the mass matrix and the accelerations to share.
     link_inertias: Vec<AngularInertia>,
-    /// CompoSuite-ROS patch: the energy guard's vectors, kept between steps.
-    guard: EnergyGuardWorkspace,
-}
-
-/// CompoSuite-ROS patch: what `update_acceleration` and `free_velocity_energy_guard` need when
-/// the guard runs (a joint faster than 0.5 rad/s at 2 ms steps). The release allocated these
-/// eight vectors anew each time; here they keep their storage, and hold the same values.
-#[derive(Clone, Debug, Default)]
-struct EnergyGuardWorkspace {
-    pos_forces: DVector,
-    gen_forces: DVector,
-    v: DVector,
-    f: DVector,
-    f_pos: DVector,
-    a: DVector,
-    m_a: DVector,
-    m_v: DVector,
 }
 
 impl Default for Multibody {
@@ -449,26 +229,19 @@ impl Multibody {
             accelerations: DVector::zeros(0),
             body_jacobians: Vec::new(),
             augmented_mass: DMatrix::zeros(0, 0),
-            inv_augmented_mass: MultibodyLu::default(),
-            acc_augmented_mass: DMatrix::zeros(0, 0),
-            acc_inv_augmented_mass: MultibodyLu::default(),
+            inv_augmented_mass: MultibodyCholesky::default(),
+            mass_matrix: DMatrix::zeros(0, 0),
+            computed_torque_pd: None,
             augmented_mass_indices: IndexSequence::new(),
             ndofs: 0,
             solver_id: 0,
             workspace: MultibodyWorkspace::new(),
-            coriolis_v: Vec::new(),
-            coriolis_w: Vec::new(),
-            i_coriolis_dt: Jacobian::zeros(0),
             root_is_dynamic: false,
             self_contacts_enabled,
             couplings: Vec::new(),
             fk_inputs: Vec::new(),
             fk_inputs_now: Vec::new(),
-            inv_mass_columns: DMatrix::zeros(0, 0),
-            jacobian_rows: Vec::new(),
-            jacobian_factors: Vec::new(),
             link_inertias: Vec::new(),
-            guard: EnergyGuardWorkspace::default(),
             // solver_workspace: Some(SolverWorkspace::new()),
         }
     }
@@ -661,9 +434,31 @@ impl Multibody {
         self.self_contacts_enabled = enabled;
     }
 
-    /// The inverse augmented mass matrix of this multibody (its LU factorisation).
-    pub fn inv_augmented_mass(&self) -> &MultibodyLu {
+    /// The inverse augmented mass matrix of this multibody (its Cholesky factorisation).
+    pub fn inv_augmented_mass(&self) -> &MultibodyCholesky {
         &self.inv_augmented_mass
+    }
+
+    /// CompoSuite-ROS patch: the mass matrix at the last step's start (armature included, no
+    /// damping or spring terms), DoFs in their own order.
+    pub fn mass_matrix(&self) -> &DMatrix<Real> {
+        &self.mass_matrix
+    }
+
+    /// CompoSuite-ROS patch: run (or stop, with `None`) a joint-space controller inside each
+    /// step, where the step's own mass matrix and bias forces are at hand.
+    pub fn set_computed_torque_pd(&mut self, pd: Option<ComputedTorquePd>) {
+        self.computed_torque_pd = pd;
+    }
+
+    /// CompoSuite-ROS patch: the joint-space controller, if one runs.
+    pub fn computed_torque_pd(&self) -> Option<&ComputedTorquePd> {
+        self.computed_torque_pd.as_ref()
+    }
+
+    /// CompoSuite-ROS patch: the joint-space controller, to change its targets.
+    pub fn computed_torque_pd_mut(&mut self) -> Option<&mut ComputedTorquePd> {
+        self.computed_torque_pd.as_mut()
     }
 
     /// The first link of this multibody.
@@ -832,33 +627,25 @@ impl Multibody {
         self.update_acceleration(dt, bodies);
     }
 
-    /// Reads the `link_inertias` the mass matrix update left: only `update_dynamics` calls it.
+    /// Reads the mass matrix, `link_inertias` and the link centres the mass matrix update left:
+    /// only `update_dynamics` calls it.
+    ///
+    /// CompoSuite-ROS patch: the Coriolis, centrifugal and gyroscopic forces are explicit, the
+    /// damping and spring forces implicit (their `dt` terms are on the mass matrix's diagonal):
+    /// MuJoCo's `implicitfast` treatment. The release instead solved the free accelerations
+    /// with a second, non-symmetric matrix holding the semi-implicit Coriolis and gyroscopic
+    /// derivatives (its own LU, and an energy guard for when that solve diverged). The
+    /// generalized forces come from one recursive Newton–Euler pass: outwards, each link's
+    /// velocity-product acceleration (zero joint accelerations); inwards, the subtrees' wrenches,
+    /// each projected on its link's own DoFs.
     fn update_acceleration(&mut self, dt: Real, bodies: &RigidBodySet) {
         if self.ndofs == 0 {
             return; // Nothing to do.
         }
 
-        crate::utils::fill_entries(self.accelerations.as_mut_slice(), 0.0); // CompoSuite-ROS patch
-
-        // If there is significant movement, the semi-implicit coriolis term
-        // occasionally cause instabilities due to the matrix being near singular.
-        // To prevent that, we enable a check that verifies the result and fallbacks
-        // to the explicit term if needed
-        let check_implicit_coriolis_divergence = dt * self.velocities.amax() >= 1.0e-3;
-        // Generalized forces that derive from positions or external inputs
-        // (gravity, user forces, spring position terms).
-        let mut guard = core::mem::take(&mut self.guard);
-        let pos_forces = &mut guard.pos_forces;
-        zero_in_place(
-            pos_forces,
-            if check_implicit_coriolis_divergence {
-                self.ndofs
-            } else {
-                0
-            },
-        );
-
-        // Eqn 42 to 45
+        let controlled = self.computed_torque_pd.is_some();
+        // Outwards: each link's acceleration with every joint acceleration zero, and the wrench
+        // that leaves on its body (applied forces minus what that acceleration takes).
         for i in 0..self.links.len() {
             let link = &self.links[i];
             let rb = &bodies[link.rigid_body];
@@ -874,10 +661,7 @@ impl Multibody {
                 // The 2.0 originates from the two identical terms of Jdot (the terms become
                 // identical once they are multiplied by the generalized velocities).
                 acc.linvel += 2.0 * parent_rb.vels.angvel.gcross(link.joint_velocity.linvel);
-                #[cfg(feature = "dim3")]
-                {
-                    acc.angvel += parent_rb.vels.angvel.cross(link.joint_velocity.angvel);
-                }
+                acc.angvel += parent_rb.vels.angvel.cross(link.joint_velocity.angvel);
 
                 acc.linvel += parent_rb
                     .vels
@@ -891,48 +675,52 @@ impl Multibody {
 
             self.workspace.accs[i] = acc;
 
-            // TODO: should gyroscopic forces already be computed by the rigid-body itself
-            //       (at the same time that we add the gravity force)?
-            let gyroscopic;
             let rb_inertia = self.link_inertias[i];
             let rb_mass = rb.mprops.effective_mass();
+            let angvel = rb.vels.angvel;
+            let gyroscopic = angvel.cross(rb_inertia * angvel);
 
-            #[cfg(feature = "dim3")]
-            {
-                let angvel = rb.vels.angvel;
-                let inertia_times_angvel = rb_inertia * angvel;
-                gyroscopic = angvel.cross(inertia_times_angvel);
+            self.workspace.wrenches[i] = Wrench {
+                force: rb.forces.force - rb_mass * acc.linvel,
+                torque: rb.forces.torque - gyroscopic - rb_inertia * acc.angvel,
+            };
+            if controlled {
+                self.workspace.user_wrenches[i] = Wrench {
+                    force: rb.forces.user_force,
+                    torque: rb.forces.user_torque,
+                };
             }
-            #[cfg(feature = "dim2")]
-            {
-                gyroscopic = 0.0;
+        }
+
+        // Inwards: each subtree's wrench on its link's own DoFs, then onto its parent.
+        for i in (0..self.links.len()).rev() {
+            let link = &self.links[i];
+            let jacobian = &self.body_jacobians[i];
+            let wrench = self.workspace.wrenches[i];
+            let user = self.workspace.user_wrenches[i];
+            for dof in link.assembly_id..link.assembly_id + link.joint.ndofs() {
+                let (v, w) = twist(jacobian, dof);
+                self.accelerations[dof] = wrench.power(v, w);
+                if controlled {
+                    self.workspace.user_forces[dof] = user.power(v, w);
+                }
             }
-
-            let external_forces = Force::new(
-                rb.forces.force - rb_mass * acc.linvel,
-                rb.forces.torque - gyroscopic - rb_inertia * acc.angvel,
-            );
-            // CompoSuite-ROS patch: over the link's non-zero Jacobian columns only. A left-out
-            // entry would add nalgebra's dot of a zero column (`+0`, the forces being finite)
-            // to an acceleration that is never `-0` (it starts at `+0`, and a sum is `-0` only
-            // from two `-0`s), which leaves it as it is: bit for bit the same.
-            let width = self.nonzero_columns(i);
-            self.accelerations.rows_mut(0, width).gemv_tr(
-                1.0,
-                &self.body_jacobians[i].columns(0, width),
-                external_forces.as_vector(),
-                1.0,
-            );
-
-            if check_implicit_coriolis_divergence {
-                let applied_forces = Force::new(rb.forces.force, rb.forces.torque);
-                pos_forces.gemv_tr(
-                    1.0,
-                    &self.body_jacobians[i],
-                    applied_forces.as_vector(),
-                    1.0,
+            if i != 0 {
+                let parent = link.parent_internal_id;
+                let d = self.workspace.centers[i] - self.workspace.centers[parent];
+                let (wrenches, users) = (
+                    &mut self.workspace.wrenches,
+                    &mut self.workspace.user_wrenches,
                 );
+                wrenches[parent].add_shifted(&wrench, d);
+                if controlled {
+                    users[parent].add_shifted(&user, d);
+                }
             }
+        }
+
+        if controlled {
+            self.apply_computed_torques();
         }
 
         self.accelerations
@@ -952,108 +740,69 @@ impl Multibody {
                         let rest = self.links[li].joint.spring_ref[a];
                         let spring_pos_force = -k * (q - rest);
                         self.accelerations[idx] += spring_pos_force - k * dt * self.velocities[idx];
-                        if check_implicit_coriolis_divergence {
-                            pos_forces[idx] += spring_pos_force;
-                        }
                     }
                     idx += 1;
                 }
             }
         }
 
-        // Snapshot the full generalized forces: the energy guard may need them
-        // for a re-solve with the plain mass matrix.
-        if check_implicit_coriolis_divergence {
-            copy_in_place(&mut guard.gen_forces, &self.accelerations);
-        }
-
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut self.accelerations, |accs| {
-                self.acc_inv_augmented_mass.solve_mut(accs);
+                self.inv_augmented_mass.solve_mut(accs);
             });
 
-        if check_implicit_coriolis_divergence {
-            self.free_velocity_energy_guard(dt, &mut guard);
+        // Last-chance check (as the release's energy guard did): a non-finite solve clears the
+        // accelerations instead of breaking the simulation.
+        if !self.accelerations.iter().all(|x| x.is_finite()) {
+            self.accelerations.fill(0.0);
         }
-        self.guard = guard;
     }
 
-    // If the semi-implicit coriolis solve introduces more energy than the external
-    // forces’ work, we recalculate without the coriolis term in the mass matrix.
-    //
-    // This operates by calculating the effective kinematic energy added by the
-    // external forces after the solve with the semi-implicit mass matrix, and
-    // compare it with the force’s work. If the energy delta exceeds a threshold
-    // (indicating undesired/unrealistic energy injection), we fall back to re-solving
-    // the forces effect but using only the mass matrix without the implicit coriolis
-    // terms.
-    fn free_velocity_energy_guard(&mut self, dt: Real, guard: &mut EnergyGuardWorkspace) {
-        let eff_dim = self.augmented_mass_indices.dim_after_removal(self.ndofs);
-        if eff_dim == 0 {
+    /// CompoSuite-ROS patch: `ComputedTorquePd`'s forces, added to the generalized forces in
+    /// `accelerations` (which hold the applied forces minus the velocity-product ones: the
+    /// bias is the user's forces minus them).
+    fn apply_computed_torques(&mut self) {
+        let Some(pd) = self.computed_torque_pd.as_mut() else {
             return;
-        }
-        let gen_forces = &guard.gen_forces;
-
-        // Move all quantities to the kinematic-reduced ordering of the
-        // factorized matrices (no-op when there is no kinematic dof).
-        // CompoSuite-ROS patch: copies into the guard's kept vectors, not clones; the products
-        // below write into kept vectors too (`mul_to` runs the same `gemm` as `*`).
-        copy_in_place(&mut guard.v, &self.velocities);
-        copy_in_place(&mut guard.f, gen_forces);
-        copy_in_place(&mut guard.f_pos, &guard.pos_forces);
-        self.augmented_mass_indices
-            .rearrange_rows(&mut guard.v, true);
-        self.augmented_mass_indices
-            .rearrange_rows(&mut guard.f, true);
-        self.augmented_mass_indices
-            .rearrange_rows(&mut guard.f_pos, true);
-        zero_in_place(&mut guard.m_a, eff_dim);
-        zero_in_place(&mut guard.m_v, eff_dim);
-
-        let m = self.augmented_mass.view((0, 0), (eff_dim, eff_dim));
-        let v = guard.v.rows(0, eff_dim);
-        let f = guard.f.rows(0, eff_dim);
-        let f_pos = guard.f_pos.rows(0, eff_dim);
-        let (a_all, m_a, m_v) = (&mut guard.a, &mut guard.m_a, &mut guard.m_v);
-
-        let mut energy_delta_minus_work = |accelerations: &DVector| -> Option<Real> {
-            copy_in_place(a_all, accelerations);
-            self.augmented_mass_indices.rearrange_rows(a_all, true);
-            let a = a_all.rows(0, eff_dim);
-            if !a.iter().all(|x| x.is_finite()) {
-                return None;
-            }
-            m.mul_to(&a, m_a);
-            let energy_delta = dt * v.dot(m_a) + 0.5 * dt * dt * a.dot(m_a);
-            let work = dt * v.dot(&f) + 0.5 * dt * dt * a.dot(&f_pos);
-            // Margin: a small fraction of the current kinetic energy to absorb
-            // discretization error on healthy steps.
-            m.mul_to(&v, m_v);
-            let kinetic_energy = 0.5 * v.dot(m_v);
-            let energy_margin = 1.0e-2 * kinetic_energy + 1.0e-8;
-            Some(energy_delta - work - energy_margin)
         };
-
-        match energy_delta_minus_work(&self.accelerations) {
-            Some(excess) if excess <= 0.0 => (), // Implicit update didn’t introduce too much extra energy.
-            _ => {
-                // The implicit solve injected energy (or produced non-finite
-                // values): fall back to the plain mass matrix.
-                self.accelerations.copy_from(gen_forces);
-                self.augmented_mass_indices.with_rearranged_rows_mut(
-                    &mut self.accelerations,
-                    |accs| {
-                        self.inv_augmented_mass.solve_mut(accs);
-                    },
-                );
-
-                // Last-chance check: if all else fails, just clear the accelerations vector
-                // instead of breaking the simulation. Hopefully it will get back to a
-                // sane result in a close timestep.
-                if !self.accelerations.iter().all(|x| x.is_finite()) {
-                    self.accelerations.fill(0.0);
+        let n = pd.targets.len();
+        let first = pd.first_dof;
+        assert!(
+            first + n <= self.ndofs && pd.effort_limits.len() == n,
+            "ComputedTorquePd: DoFs {first}..{} of {}, {} effort limits for {n} targets",
+            first + n,
+            self.ndofs,
+            pd.effort_limits.len()
+        );
+        // The generalized coordinates, as the springs read them.
+        let positions = &mut self.workspace.positions;
+        for link in self.links.iter() {
+            let mut idx = link.assembly_id;
+            let locked = link.joint.data.locked_axes.bits();
+            for a in 0..SPATIAL_DIM {
+                if (locked >> a) & 1 == 0 {
+                    positions[idx] = link.joint.coords[a];
+                    idx += 1;
                 }
             }
+        }
+        let desired = &mut self.workspace.desired;
+        for k in 0..n {
+            let dof = first + k;
+            desired[k] = pd.kp * (pd.targets[k] - positions[dof]) - pd.kd * self.velocities[dof];
+        }
+        pd.torques.resize(n, 0.0);
+        for k in 0..n {
+            let dof = first + k;
+            let mut tau = 0.0;
+            for l in 0..n {
+                tau += self.mass_matrix[(dof, first + l)] * desired[l];
+            }
+            let bias = self.workspace.user_forces[dof] - self.accelerations[dof];
+            let limit = pd.effort_limits[k];
+            let tau = (tau + bias).clamp(-limit, limit);
+            pd.torques[k] = tau;
+            self.accelerations[dof] += tau;
         }
     }
 
@@ -1165,6 +914,15 @@ impl Multibody {
         }
     }
 
+    /// CompoSuite-ROS patch: the mass matrix by the composite-rigid-body algorithm, factorised
+    /// once (Cholesky) for the free accelerations and every constraint row.
+    ///
+    /// Inwards over the links, each link's subtree becomes one body (`Composite`, about the
+    /// link's centre of mass); for each of the link's own DoFs, the momentum of that subtree
+    /// under the DoF's unit motion, carried down to the root, gives the DoF's entries with
+    /// itself and every DoF before it on the path. The release summed `Jᵀ·M·J` over the links
+    /// (O(links · DoFs²)), plus a second, semi-implicit matrix with Coriolis and gyroscopic
+    /// blocks (see `update_acceleration`).
     pub(crate) fn update_mass_matrix(&mut self, dt: Real, bodies: &RigidBodySet) {
         // CompoSuite-ROS patch: each body's angular inertia once (see `link_inertias`).
         self.link_inertias.clear();
@@ -1177,39 +935,23 @@ impl Multibody {
             return; // Nothing to do.
         }
 
-        if self.augmented_mass.ncols() != self.ndofs {
-            // TODO: do a resize instead of a full reallocation.
-            self.augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
-            self.acc_augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
+        let n = self.ndofs;
+        if self.augmented_mass.ncols() != n {
+            self.augmented_mass = DMatrix::zeros(n, n);
+            self.mass_matrix = DMatrix::zeros(n, n);
         } else {
-            // CompoSuite-ROS patch: cleared as slices (a `memset`), not entry by entry.
-            self.augmented_mass.as_mut_slice().fill(0.0);
-            self.acc_augmented_mass.as_mut_slice().fill(0.0);
+            // Only the entries of DoFs on one path get written below: clear the rest.
+            self.mass_matrix.as_mut_slice().fill(0.0);
+        }
+        if self.workspace.composites.len() != self.links.len()
+            || self.workspace.user_forces.len() != n
+        {
+            self.workspace.resize(self.links.len(), n);
         }
 
         self.augmented_mass_indices.clear();
-
-        // Resize coriolis workspaces if the link count or number of DOFs change.
-        let coriolis_ndofs = self.coriolis_v.first().map(|m| m.ncols());
-        if self.coriolis_v.len() != self.links.len() || coriolis_ndofs != Some(self.ndofs) {
-            self.coriolis_v = vec![OMatrix::<Real, Dim, Dyn>::zeros(self.ndofs); self.links.len()];
-            self.coriolis_w =
-                vec![OMatrix::<Real, AngDim, Dyn>::zeros(self.ndofs); self.links.len()];
-            self.i_coriolis_dt = Jacobian::zeros(self.ndofs);
-        }
-
         let mut curr_assembly_id = 0;
-
-        for i in 0..self.links.len() {
-            // CompoSuite-ROS patch: see `nonzero_columns`.
-            let width = self.nonzero_columns(i);
-            let link = &self.links[i];
-            let rb = &bodies[link.rigid_body];
-            let rb_mass = rb.mprops.effective_mass();
-            let rb_inertia = self.link_inertias[i].into_matrix();
-            #[cfg(feature = "dim2")]
-            let body_jacobian = self.body_jacobians[i].columns(0, width);
-
+        for (i, link) in self.links.iter().enumerate() {
             // NOTE: the mass matrix index reordering operates on the assumption that the assembly
             //       ids are traversed in order. This assert is here to ensure the assumption always
             //       hold.
@@ -1218,232 +960,78 @@ impl Multibody {
                 "Internal error: contiguity assumption on assembly_id does not hold."
             );
             curr_assembly_id += link.joint.ndofs();
-
-            if link.joint.kinematic {
-                for k in link.assembly_id..link.assembly_id + link.joint.ndofs() {
+            for k in link.assembly_id..link.assembly_id + link.joint.ndofs() {
+                if link.joint.kinematic {
                     self.augmented_mass_indices.remove(k);
-                }
-            } else {
-                for k in link.assembly_id..link.assembly_id + link.joint.ndofs() {
+                } else {
                     self.augmented_mass_indices.keep(k);
                 }
             }
 
-            #[allow(unused_mut)] // mut is needed for 3D but not for 2D.
-            let mut augmented_inertia = rb_inertia;
+            let rb = &bodies[link.rigid_body];
+            let mass = rb.mprops.effective_mass();
+            debug_assert!(
+                mass.x == mass.y && mass.y == mass.z,
+                "CRBA: a multibody link's translations are locked one by one"
+            );
+            self.workspace.centers[i] = rb.mprops.world_com;
+            self.workspace.composites[i] =
+                Composite::body(mass.x, self.link_inertias[i].into_matrix());
+        }
 
-            #[cfg(feature = "dim3")]
-            {
-                // Derivative of gyroscopic forces.
-                let gyroscopic_matrix = rb.vels.angvel.gcross_matrix() * rb_inertia
-                    - (rb_inertia * rb.vels.angvel).gcross_matrix();
-
-                augmented_inertia += gyroscopic_matrix * dt;
-            }
-
-            // TODO: optimize that (knowing the structure of the augmented inertia matrix).
-            // TODO: this could be better optimized in 2D.
-            #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
-            let rb_mass_matrix_wo_gyro = concat_rb_mass_matrix(rb_mass, rb_inertia.into());
-            #[allow(clippy::useless_conversion)] // Needed in 3D, no-op in 2D
-            let rb_mass_matrix = concat_rb_mass_matrix(rb_mass, augmented_inertia.into());
-            // (In 3D both products are added below, with the Coriolis rows: `add_link_mass_terms`.)
-            #[cfg(feature = "dim2")]
-            if width > 0 {
-                self.augmented_mass
-                    .view_mut((0, 0), (width, width))
-                    .quadform(1.0, &rb_mass_matrix_wo_gyro, &body_jacobian, 1.0);
-                self.acc_augmented_mass
-                    .view_mut((0, 0), (width, width))
-                    .quadform(1.0, &rb_mass_matrix, &body_jacobian, 1.0);
-            }
-
-            /*
-             *
-             * Coriolis matrix.
-             *
-             */
-            let rb_j = self.body_jacobians[i].columns(0, width);
-            let rb_j_w = rb_j.fixed_rows::<ANG_DIM>(DIM);
-
-            let ndofs = link.joint.ndofs();
-
-            if i != 0 {
-                let parent_id = link.parent_internal_id;
-                let parent_link = &self.links[parent_id];
-                let parent_rb = &bodies[parent_link.rigid_body];
-                let parent_width = self.nonzero_columns(parent_id);
-                let parent_j = self.body_jacobians[parent_id].columns(0, parent_width);
-                let parent_j_w = parent_j.fixed_rows::<ANG_DIM>(DIM);
-                let parent_w = SimdAngVector::<Real>::from(parent_rb.vels.angvel).gcross_matrix();
-
-                let (coriolis_v, parent_coriolis_v) = self.coriolis_v.index_mut2(i, parent_id);
-                let (coriolis_w, parent_coriolis_w) = self.coriolis_w.index_mut2(i, parent_id);
-
-                // CompoSuite-ROS patch: copied as slices (same shapes), not entry by entry.
-                coriolis_v
-                    .as_mut_slice()
-                    .copy_from_slice(parent_coriolis_v.as_slice());
-                coriolis_w
-                    .as_mut_slice()
-                    .copy_from_slice(parent_coriolis_w.as_slice());
-                // Only the parent's non-zero columns take part in the products below; the
-                // link's own DoF columns are added after them.
-                let mut coriolis_v = coriolis_v.columns_mut(0, parent_width);
-                let mut coriolis_w_parent = coriolis_w.columns_mut(0, parent_width);
-                let parent_coriolis_w = parent_coriolis_w.columns(0, parent_width);
-
-                // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
-                let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                gemm3(
-                    &mut coriolis_v,
-                    1.0,
-                    &shift_cross_tr,
-                    &parent_coriolis_w,
-                    1.0,
-                );
-
-                // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
-                let dvel_cross = vect_to_na(
-                    rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
-                )
-                .gcross_matrix_tr();
-                // JDot/u * qdot: the two products after it.
-                // CompoSuite-ROS patch: the three products by `parent_j_w` in one pass.
-                gemm3_sum(
-                    &mut coriolis_v,
-                    [
-                        &dvel_cross,
-                        &vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr(),
-                        &(parent_w * shift_cross_tr),
-                    ],
-                    &parent_j_w,
-                );
-
-                #[cfg(feature = "dim3")]
-                {
-                    let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
-                    gemm3(
-                        &mut coriolis_w_parent,
-                        -1.0,
-                        &vel_wrt_joint_w,
-                        &parent_j_w,
-                        1.0,
-                    );
+        for i in (0..self.links.len()).rev() {
+            let composite = self.workspace.composites[i];
+            let link = &self.links[i];
+            let own = link.assembly_id..link.assembly_id + link.joint.ndofs();
+            for k in own.clone() {
+                let (v, w) = twist(&self.body_jacobians[i], k);
+                let (linear, angular) = composite.momentum(v, w);
+                let mut momentum = Wrench {
+                    force: linear,
+                    torque: angular,
+                };
+                // With the link's own DoFs (both triangles: k meets each of them once).
+                for l in own.clone() {
+                    let (vl, wl) = twist(&self.body_jacobians[i], l);
+                    self.mass_matrix[(l, k)] = momentum.power(vl, wl);
                 }
-                let coriolis_v = &mut self.coriolis_v[i];
-                let coriolis_w = &mut self.coriolis_w[i];
-
-                // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
-                if !link.joint.kinematic {
-                    let mut coriolis_v_part = coriolis_v.columns_mut(link.assembly_id, ndofs);
-
-                    let mut tmp1 = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
-                    let mut rb_joint_j = tmp1.columns_mut(0, ndofs);
-                    link.joint.jacobian(
-                        &(parent_link.local_to_world.rotation
-                            * link.joint.data.local_frame1.rotation),
-                        &mut rb_joint_j,
-                    );
-
-                    let rb_joint_j_v = rb_joint_j.fixed_rows::<DIM>(0);
-                    gemm3(&mut coriolis_v_part, 2.0, &parent_w, &rb_joint_j_v, 1.0);
-
-                    #[cfg(feature = "dim3")]
-                    {
-                        let rb_joint_j_w = rb_joint_j.fixed_rows::<ANG_DIM>(DIM);
-                        let mut coriolis_w_part = coriolis_w.columns_mut(link.assembly_id, ndofs);
-                        gemm3(&mut coriolis_w_part, 1.0, &parent_w, &rb_joint_j_w, 1.0);
+                // With each ancestor's DoFs, the momentum carried to its centre.
+                let mut j = i;
+                while j != 0 {
+                    let parent = self.links[j].parent_internal_id;
+                    let d = self.workspace.centers[j] - self.workspace.centers[parent];
+                    momentum.torque += d.cross(momentum.force);
+                    j = parent;
+                    let ancestor = &self.links[j];
+                    for l in ancestor.assembly_id..ancestor.assembly_id + ancestor.joint.ndofs() {
+                        let (vl, wl) = twist(&self.body_jacobians[j], l);
+                        let entry = momentum.power(vl, wl);
+                        self.mass_matrix[(l, k)] = entry;
+                        self.mass_matrix[(k, l)] = entry;
                     }
                 }
-            } else {
-                self.coriolis_v[i].fill(0.0);
-                self.coriolis_w[i].fill(0.0);
             }
-
-            let mut coriolis_v = self.coriolis_v[i].columns_mut(0, width);
-            let coriolis_w = self.coriolis_w[i].columns(0, width);
-
-            {
-                // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
-                let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
-                gemm3(&mut coriolis_v, 1.0, &shift_cross_tr, &coriolis_w, 1.0);
-
-                // JDot
-                let dvel_cross = vect_to_na(rb.vels.angvel.gcross(link.shift23)).gcross_matrix_tr();
-                // JDot/u * qdot: the product after it.
-                // CompoSuite-ROS patch: both products by `rb_j_w` in one pass.
-                gemm3_sum(
-                    &mut coriolis_v,
-                    [
-                        &dvel_cross,
-                        &(SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix()
-                            * shift_cross_tr),
-                    ],
-                    &rb_j_w,
-                );
+            if i != 0 {
+                let parent = link.parent_internal_id;
+                let d = self.workspace.centers[i] - self.workspace.centers[parent];
+                self.workspace.composites[parent].add_shifted(&composite, d);
             }
-
-            let coriolis_v = self.coriolis_v[i].columns(0, width);
-
-            /*
-             * Meld with the mass matrix.
-             */
-            {
-                let mut i_coriolis_dt = self.i_coriolis_dt.columns_mut(0, width);
-                let mut i_coriolis_dt_v = i_coriolis_dt.fixed_rows_mut::<DIM>(0);
-                i_coriolis_dt_v.copy_from(&coriolis_v);
-                let rb_mass_dt = vect_to_na(rb_mass * dt);
-                i_coriolis_dt_v
-                    .column_iter_mut()
-                    .for_each(|mut c| c.component_mul_assign(&rb_mass_dt));
-            }
-
-            #[cfg(feature = "dim2")]
-            {
-                let mut i_coriolis_dt_w = self.i_coriolis_dt.fixed_rows_mut::<ANG_DIM>(DIM);
-                // NOTE: this is just an axpy, but on row columns.
-                i_coriolis_dt_w.zip_apply(coriolis_w, |o, x| *o = x * dt * rb_inertia);
-            }
-            #[cfg(feature = "dim3")]
-            {
-                let mut i_coriolis_dt = self.i_coriolis_dt.columns_mut(0, width);
-                let mut i_coriolis_dt_w = i_coriolis_dt.fixed_rows_mut::<ANG_DIM>(DIM);
-                gemm3(
-                    &mut i_coriolis_dt_w,
-                    dt,
-                    &mat_to_na(rb_inertia),
-                    &coriolis_w,
-                    0.0,
-                );
-            }
-
-            #[cfg(feature = "dim3")]
-            add_link_mass_terms(
-                &mut self.augmented_mass,
-                &mut self.acc_augmented_mass,
-                &self.body_jacobians[i],
-                &self.i_coriolis_dt,
-                width,
-                &rb_mass_matrix_wo_gyro,
-                &rb_mass_matrix,
-                &mut self.jacobian_rows,
-                &mut self.jacobian_factors,
-            );
         }
 
         /*
-         * Damping and armature.
-         *
-         * Damping is a velocity-proportional force made implicit, so it adds
-         * `dt · d` to the mass-matrix diagonal. Armature is a "reflected
-         * rotor inertia" (additional inertia to account for the joint’s
-         * mass and geometry itself): it adds to the diagonal directly.
+         * Armature: a "reflected rotor inertia" (additional inertia to account for the joint’s
+         * mass and geometry itself), part of the mass matrix proper (the controller's too).
+         * Damping is a velocity-proportional force made implicit, so it adds `dt · d` to the
+         * diagonal of the matrix the step solves with.
          */
-        for i in 0..self.ndofs {
-            let diag = self.damping[i] * dt + self.armature[i];
-            self.acc_augmented_mass[(i, i)] += diag;
-            self.augmented_mass[(i, i)] += diag;
+        for i in 0..n {
+            self.mass_matrix[(i, i)] += self.armature[i];
+        }
+        self.augmented_mass
+            .as_mut_slice()
+            .copy_from_slice(self.mass_matrix.as_slice());
+        for i in 0..n {
+            self.augmented_mass[(i, i)] += self.damping[i] * dt;
         }
 
         // Implicit joint springs: `dt²·k` on the mass-matrix diagonal (force term in `update_acceleration`)
@@ -1457,64 +1045,35 @@ impl Multibody {
                 if (locked >> a) & 1 == 0 {
                     let k = self.links[li].joint.spring_stiffness[a];
                     if k != 0.0 {
-                        let d = k * dt2;
-                        self.acc_augmented_mass[(idx, idx)] += d;
-                        self.augmented_mass[(idx, idx)] += d;
+                        self.augmented_mass[(idx, idx)] += k * dt2;
                     }
                     idx += 1;
                 }
             }
         }
 
-        let effective_dim = self
-            .augmented_mass_indices
-            .dim_after_removal(self.acc_augmented_mass.nrows());
-
-        // PERF: since we clone the matrix anyway for LU, should be directly output
-        //       a new matrix instead of applying permutations?
-        self.augmented_mass_indices
-            .rearrange_columns(&mut self.acc_augmented_mass, true);
+        let effective_dim = self.augmented_mass_indices.dim_after_removal(n);
         self.augmented_mass_indices
             .rearrange_columns(&mut self.augmented_mass, true);
-
-        self.augmented_mass_indices
-            .rearrange_rows(&mut self.acc_augmented_mass, true);
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
-
-        // CompoSuite-ROS patch: factorised in place, in storage kept from the last step (the
-        // release allocated a matrix copy and a permutation per factorisation, twice a step).
-        self.acc_inv_augmented_mass
-            .factorise(&self.acc_augmented_mass, effective_dim);
         self.inv_augmented_mass
             .factorise(&self.augmented_mass, effective_dim);
-
-        // CompoSuite-ROS patch: every column of M⁻¹ once, for the unit rows to share.
-        let n = self.ndofs;
-        if effective_dim == n {
-            if self.inv_mass_columns.shape() != (n, n) {
-                self.inv_mass_columns = DMatrix::zeros(n, n);
-            }
-            // Four columns at a time (`solve_all_units`), each as `solve_unit` gives it.
-            self.inv_augmented_mass
-                .solve_all_units(&mut self.inv_mass_columns);
-        } else {
-            self.inv_mass_columns = DMatrix::zeros(0, 0);
-        }
     }
 
     /// CompoSuite-ROS patch: `out = M⁻¹·e_dof`, what a motor, limit or friction row on one DoF
     /// needs. On an arm, each DoF has a friction row and a motor or limit row besides, and each
-    /// row solved against the LU again (~900 instructions for 9 DoFs); now the columns are
-    /// solved once per factorisation and copied — the same solve of the same vector, so bit for
-    /// bit the same. (Falls back to solving when DoFs are kinematic, as before.)
+    /// row solved again (~900 instructions for 9 DoFs with the release's LU); now it is a column
+    /// of the `M⁻¹` the factorisation formed, copied. (Falls back to solving when DoFs are
+    /// kinematic, as before.)
     pub(crate) fn solve_unit_row<S: StorageMut<Real, Dyn>>(
         &self,
         dof: usize,
         out: &mut na::Matrix<Real, Dyn, na::U1, S>,
     ) {
-        if self.inv_mass_columns.ncols() == out.nrows() {
-            out.copy_from(&self.inv_mass_columns.column(dof));
+        let inverse = self.inv_augmented_mass.inverse();
+        if inverse.ncols() == out.nrows() {
+            out.copy_from(&inverse.column(dof));
         } else {
             out.fill(0.0);
             out[dof] = 1.0;
@@ -2588,108 +2147,11 @@ mod test {
 /// bit, on random values and every width a 9-DoF tree has (and some more).
 #[cfg(all(test, feature = "dim3"))]
 mod exact_kernel_tests {
-    use super::{add_link_mass_terms, gemm3};
+    use super::gemm3;
     use crate::alloc_prelude::*;
-    use crate::math::{Jacobian, Real, SPATIAL_DIM};
+    use crate::math::Real;
     use crate::utils::test_values as values;
-    use na::{DMatrix, Matrix3, SMatrix};
-
-    fn bits(m: &DMatrix<Real>) -> Vec<u32> {
-        m.iter().map(|x| x.to_bits()).collect()
-    }
-
-    #[test]
-    fn link_mass_terms_equal_nalgebras_quadform_and_gemm_tr_bit_for_bit() {
-        let mut rows = Vec::new();
-        let mut factors = Vec::new();
-        for (seed, ndofs, width) in [
-            (1, 9, 1),
-            (2, 9, 4),
-            (3, 9, 5),
-            (4, 9, 7),
-            (5, 9, 9),
-            (6, 13, 13),
-        ] {
-            let v = values(seed, 400);
-            let jacobian = Jacobian::<Real>::from_iterator(ndofs, v[..6 * ndofs].iter().copied());
-            let coriolis =
-                Jacobian::<Real>::from_iterator(ndofs, v[100..100 + 6 * ndofs].iter().copied());
-            let inertia = Matrix3::from_iterator(v[200..209].iter().copied());
-            let gyro = Matrix3::from_iterator(v[210..219].iter().copied());
-            let mass = [v[220].abs(), v[220].abs(), v[220].abs()];
-            let block = |angular: Matrix3<Real>| {
-                let mut m = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
-                for r in 0..3 {
-                    m[(r, r)] = mass[r];
-                }
-                m.fixed_view_mut::<3, 3>(3, 3).copy_from(&angular);
-                m
-            };
-            let (plain_mass, semi_mass) = (block(inertia), block(inertia + gyro));
-            let start =
-                DMatrix::from_iterator(ndofs, ndofs, v[230..230 + ndofs * ndofs].iter().copied());
-
-            // The release: two quadforms, then `gemm_tr`, on the leading width × width block.
-            let (mut plain_theirs, mut semi_theirs) = (start.clone(), start.clone());
-            let j = jacobian.columns(0, width);
-            plain_theirs
-                .view_mut((0, 0), (width, width))
-                .quadform(1.0, &plain_mass, &j, 1.0);
-            semi_theirs
-                .view_mut((0, 0), (width, width))
-                .quadform(1.0, &semi_mass, &j, 1.0);
-            semi_theirs.view_mut((0, 0), (width, width)).gemm_tr(
-                1.0,
-                &j,
-                &coriolis.columns(0, width),
-                1.0,
-            );
-
-            let (mut plain_ours, mut semi_ours) = (start.clone(), start.clone());
-            add_link_mass_terms(
-                &mut plain_ours,
-                &mut semi_ours,
-                &jacobian,
-                &coriolis,
-                width,
-                &plain_mass,
-                &semi_mass,
-                &mut rows,
-                &mut factors,
-            );
-            assert_eq!(
-                bits(&plain_ours),
-                bits(&plain_theirs),
-                "plain, width {width}"
-            );
-            assert_eq!(
-                bits(&semi_ours),
-                bits(&semi_theirs),
-                "semi-implicit, width {width}"
-            );
-        }
-    }
-
-    #[test]
-    fn gemm3_sum_equals_consecutive_gemms_bit_for_bit() {
-        for (seed, width) in [(1, 1), (2, 9), (3, 6)] {
-            let v = values(seed, 200);
-            let a: [Matrix3<Real>; 3] = core::array::from_fn(|m| {
-                Matrix3::from_iterator(v[9 * m..9 * m + 9].iter().copied())
-            });
-            let b =
-                na::Matrix3xX::<Real>::from_iterator(width, v[30..30 + 3 * width].iter().copied());
-            let y0 =
-                na::Matrix3xX::<Real>::from_iterator(width, v[70..70 + 3 * width].iter().copied());
-            let (mut ours, mut theirs) = (y0.clone(), y0.clone());
-            super::gemm3_sum(&mut ours, [&a[0], &a[1], &a[2]], &b);
-            for m in &a {
-                theirs.gemm(1.0, m, &b, 1.0);
-            }
-            let bits = |m: &na::Matrix3xX<Real>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&ours), bits(&theirs), "width {width}");
-        }
-    }
+    use na::Matrix3;
 
     #[test]
     fn gemm3_equals_nalgebras_gemm_bit_for_bit() {
