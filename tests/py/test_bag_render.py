@@ -47,13 +47,14 @@ def test_session_video_writes_one_video_per_episode_with_a_frame_per_step(record
     rows = list(csv.DictReader((out / "episodes.csv").open()))
     assert len(rows) == 4 and "videos/ (4 gif)" in recorded["stdout"]
     for row in rows:
-        episode, length = int(row["episode"]), int(row["length"])
+        # The videos are named by the task manager's episode numbers, as `bag render` names them.
+        episode, length = int(row["suite_episode"]), int(row["length"])
         frames = gif_frames(out / "videos" / f"episode_{episode:03}.gif")
         assert len(frames) == length + 1 == len(recorded["observations"][episode])
         assert frames[0].shape == (64, 64, 3)
         assert not np.array_equal(frames[0], frames[-1]), "the arm moved"
     assert sorted(p.name for p in (out / "videos").iterdir()) == [
-        f"episode_{int(r['episode']):03}.gif" for r in rows]
+        f"episode_{int(r['suite_episode']):03}.gif" for r in rows]
 
 
 def test_bag_render_gif_and_mp4_open_in_standard_readers(recorded, tmp_path):

@@ -95,7 +95,8 @@ def test_eval_metrics_equal_the_bag_and_the_in_process_env(suite, tmp_path):
     suite.stop()
     bag = json.loads(subprocess.run([str(node_dir() / "composuite"), "bag", "episodes", str(suite.bag),
                                      "--json"], capture_output=True, text=True, check=True).stdout)
-    recorded = {(b["namespace"], b["episode"]): b for b in bag}
+    # Keyed by the task manager's episode numbers, which the evaluation reports.
+    recorded = {(b["namespace"], b["suite_episode"]): b for b in bag}
     for e in episodes:
         b = recorded[(e["namespace"], e["episode"])]
         assert (b["task"], b["seed"], b["length"]) == (e["task"], e["seed"], e["length"])

@@ -37,6 +37,11 @@ def test_a_two_task_session_writes_a_bag_and_a_table_that_agree(tmp_path):
     rows = list(csv.DictReader((out / "episodes.csv").open()))
     assert [(r["task"], r["seed"], r["length"]) for r in rows] == [
         (t, str(s), "40") for t in TASKS for s in (7, 8)]
+    # Numbered as the progress lines print them; the task manager's numbers beside (each task's
+    # `set_task` starts an episode that the seeded reset ends before its first step: 1 and 4).
+    assert [r["episode"] for r in rows] == ["1", "2", "3", "4"]
+    assert [r["suite_episode"] for r in rows] == ["2", "3", "5", "6"]
+    assert "episode 1/4:" in result.stderr and "episode 4/4:" in result.stderr
     assert json.loads((out / "episodes.json").read_text())[0]["task"] == TASKS[0]
     assert png_size(out / "rewards.png") == (1000, 600)
     assert png_size(out / "success.png") == (1000, 120 + 32 * len(TASKS)), "one bar per task"

@@ -322,8 +322,12 @@ fn human_size(bytes: u64) -> String {
 pub struct Episode {
     /// Namespace of its environment (`/` or `/env_00`).
     pub namespace: String,
-    /// Episode number given by the task manager.
+    /// 1-based, in the order the environment's episodes started, counting those that took a
+    /// step: what `composuite session` prints ("episode 1/3").
     pub episode: u32,
+    /// The task manager's number for it (its `episode` topic's, and the session's video names),
+    /// which also counts the episodes ended before their first step (the one `set_task` starts).
+    pub suite_episode: u32,
     /// `robot/object/obstacle/objective`.
     pub task: String,
     /// Its seed.
@@ -345,7 +349,8 @@ pub struct Episode {
 impl Episode {
     /// The row as JSON (what `--json` prints).
     pub fn json(&self) -> serde_json::Value {
-        json!({"namespace": self.namespace, "episode": self.episode, "task": self.task,
+        json!({"namespace": self.namespace, "episode": self.episode,
+               "suite_episode": self.suite_episode, "task": self.task,
                "seed": self.seed, "length": self.length, "return": self.episode_return,
                "success": self.success, "furthest_stage": self.furthest_stage,
                "done": self.done, "reason": self.reason})
@@ -369,7 +374,8 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
                 let i = *index.entry(key).or_insert_with(|| {
                     found.push(Episode {
                         namespace: ns,
-                        episode: s.episode,
+                        episode: 0, // numbered below, once the stepless ones are gone
+                        suite_episode: s.episode,
                         task: format!(
                             "{}/{}/{}/{}",
                             s.task.robot, s.task.object, s.task.obstacle, s.task.objective
@@ -417,10 +423,14 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
         );
     }
     found.retain(|e| e.length > 0);
+    let mut numbered: BTreeMap<String, u32> = BTreeMap::new();
     for e in &mut found {
-        if let Some(stage) = stages.get(&(e.namespace.clone(), e.episode)) {
+        if let Some(stage) = stages.get(&(e.namespace.clone(), e.suite_episode)) {
             e.furthest_stage = *stage;
         }
+        let count = numbered.entry(e.namespace.clone()).or_insert(0);
+        *count += 1;
+        e.episode = *count;
     }
     Ok(found)
 }
@@ -428,13 +438,14 @@ pub fn episodes(bag: &Path) -> Result<Vec<Episode>, String> {
 /// The table as CSV (one header line).
 pub fn episodes_csv(episodes: &[Episode]) -> String {
     let mut out = String::from(
-        "namespace,episode,task,seed,length,return,success,furthest_stage,done,reason\n",
+        "namespace,episode,suite_episode,task,seed,length,return,success,furthest_stage,done,reason\n",
     );
     for e in episodes {
         out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},\"{}\"\n",
+            "{},{},{},{},{},{},{},{},{},{},\"{}\"\n",
             e.namespace,
             e.episode,
+            e.suite_episode,
             e.task,
             e.seed,
             e.length,

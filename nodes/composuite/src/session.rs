@@ -194,7 +194,10 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
             out.display()
         ));
     }
-    let rows: Vec<Episode> = outcomes.iter().map(|o| row(&namespace, o)).collect();
+    let rows: Vec<Episode> = (1..)
+        .zip(&outcomes)
+        .map(|(number, o)| row(&namespace, number, o))
+        .collect();
     write(&out.join("episodes.csv"), &episodes_csv(&rows))?;
     let json: Vec<_> = rows.iter().map(Episode::json).collect();
     write(
@@ -249,10 +252,12 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
 
 /// The session's row of an episode, in the table `composuite bag episodes` recomputes from
 /// the bag.
-fn row(namespace: &str, o: &EpisodeOutcome) -> Episode {
+/// The table's row for the session's `number`-th episode (1-based, as the progress printed it).
+fn row(namespace: &str, number: u32, o: &EpisodeOutcome) -> Episode {
     Episode {
         namespace: namespace.into(),
-        episode: o.episode,
+        episode: number,
+        suite_episode: o.episode,
         task: o.task.to_string(),
         seed: o.seed,
         length: o.steps,

@@ -86,7 +86,7 @@ fn lane_columns(a: &na::Matrix3<Real>) -> [wide::f32x4; 3] {
 /// exactly as nalgebra's `gemm` computes it for these shapes — column by column, each entry
 /// `(alpha·a[i,0])·b[0,j] + beta·y[i,j]`, then `+ (alpha·a[i,k])·b[k,j]` for k = 1, 2 (and
 /// without using `y` when `beta` is 0) — so the results are the same bit for bit, without
-/// the generic per-column dispatch (the Coriolis terms run a dozen of these per link per step).
+/// the generic per-column dispatch (the body Jacobians run two of these per link per step).
 /// A column's three entries run side by side in the lanes of an `f32x4`, each lane the scalar
 /// operations of its entry.
 #[cfg(feature = "dim3")]
@@ -619,9 +619,9 @@ impl Multibody {
             .extend((0..num_jacobians).map(|_| Jacobian::zeros(0)));
     }
 
-    /// CompoSuite-ROS patch: the mass matrices and the accelerations of the links' bodies as
-    /// they are, in the order the solver needs them, with each body's world angular inertia
-    /// inverted once for both (the release inverted it in each).
+    /// CompoSuite-ROS patch: the mass matrix (and its factorisation) and the free accelerations
+    /// of the links' bodies as they are, in the order the solver needs them, with each body's
+    /// world angular inertia inverted once for both (the release inverted it in each).
     pub(crate) fn update_dynamics(&mut self, dt: Real, bodies: &RigidBodySet) {
         self.update_mass_matrix(dt, bodies);
         self.update_acceleration(dt, bodies);
@@ -841,8 +841,8 @@ impl Multibody {
         }
     }
 
-    /// CompoSuite-ROS patch: how many leading columns of link `i`'s body Jacobian (and of its
-    /// Coriolis workspaces) can be non-zero. Links come in topological order and each link's
+    /// CompoSuite-ROS patch: how many leading columns of link `i`'s body Jacobian can be
+    /// non-zero. Links come in topological order and each link's
     /// DoFs follow its parent's, so only the columns of the link's own DoFs and of the DoFs
     /// before them (its ancestors' among them) can move it; the rest stay exactly zero. The
     /// dense products below skip those columns: every entry they still compute is summed in
