@@ -216,16 +216,18 @@ def test_bag_episodes_equal_a_recomputation_with_rosbags(session):
     recorded = bag_messages(bag)
     by_episode: dict[int, dict] = {}
     for _, s in recorded[f"{NS}/episode"]:
-        row = by_episode.setdefault(s.episode, {"episode": s.episode, "seed": s.seed, "length": 0})
+        row = by_episode.setdefault(s.episode, {"suite_episode": s.episode, "seed": s.seed, "length": 0})
         if s.step >= row["length"]:
             row.update(length=s.step, done=s.done, success=s.success_seen, **{"return": s.episode_return})
     stages: dict[int, int] = {}
     for _, r in recorded[f"{NS}/reward"]:
         if r.step > 0:  # step 0 is the reset state, not a step taken
             stages[r.episode] = max(stages.get(r.episode, -1), r.current_stage)
-    # Episodes that took a step (set_task's own episode ends at the seeded reset, at step 0).
-    expected = [dict(row, furthest_stage=stages.get(e, -1), task=TASK, namespace=NS)
-                for e, row in sorted(by_episode.items()) if row["length"] > 0]
+    # Episodes that took a step (set_task's own episode ends at the seeded reset, at step 0),
+    # numbered 1, 2, … in the order they started; the topic's own numbers as suite_episode.
+    stepped = [(e, row) for e, row in sorted(by_episode.items()) if row["length"] > 0]
+    expected = [dict(row, episode=n, furthest_stage=stages.get(e, -1), task=TASK, namespace=NS)
+                for n, (e, row) in enumerate(stepped, start=1)]
     assert [{k: e[k] for k in expected[0]} for e in ours] == expected
     assert [(e["seed"], e["length"]) for e in ours][-2:] == EPISODES
     assert ours[-2]["done"] and not ours[-1]["done"]
