@@ -174,7 +174,9 @@ pub struct Multibody {
     // TODO: use sparse matrices?
     augmented_mass: DMatrix<Real>,
     // CompoSuite-ROS patch: factorised in place (`multibody_cholesky.rs`), not a new `LU` per
-    // step; the one factorisation the free accelerations and the constraints share.
+    // step; the one factorisation the free accelerations and the constraints share. Not
+    // serialised: every step refactorises it from `augmented_mass`.
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
     inv_augmented_mass: MultibodyCholesky,
     /// CompoSuite-ROS patch: the mass matrix proper (armature included; no damping or spring
     /// terms), in the DoFs' own order: what `ComputedTorquePd` multiplies by.
