@@ -14,6 +14,8 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 TIMEOUT = 10.0
+# Closing waits for QUIET s without a change in the graph, at most QUIET_MAX s (see close).
+QUIET, QUIET_MAX = 0.5, 5.0
 
 
 class RclpyAgent:
@@ -29,9 +31,37 @@ class RclpyAgent:
         self.executor.add_node(self.node)
 
     def close(self) -> None:
+        self.until_discovery_is_quiet()
         self.executor.shutdown()
         self.node.destroy_node()
         rclpy.shutdown(context=self.context)
+
+    def until_discovery_is_quiet(self) -> None:
+        """Spin until the ROS graph this node sees has not changed for QUIET s (at most
+        QUIET_MAX s). Deleting the node deletes its Fast DDS participant, and Fast DDS 2.14 (the
+        Jazzy wheels') can deadlock there if a discovery callback runs at that moment: seen in
+        a CI run, the main thread spinning in DomainParticipant::set_listener(nullptr) called
+        by rmw's destroy_participant, a receive thread blocked in
+        MyRTPSParticipantListener::onWriterDiscovery — for good, with the GIL held. Those
+        callbacks come while remote endpoints are still being discovered (a test that closes
+        its agent right after the first services answer, with three environments' worth of
+        endpoints still arriving), so the agent waits for discovery to settle first."""
+        node = self.node
+
+        def graph():
+            topics = node.get_topic_names_and_types()
+            return (tuple((name, tuple(types), node.count_publishers(name), node.count_subscribers(name))
+                          for name, types in topics),
+                    tuple(sorted((name, tuple(types)) for name, types in node.get_service_names_and_types())),
+                    tuple(sorted(node.get_node_names_and_namespaces())))
+
+        deadline = time.monotonic() + QUIET_MAX
+        last, since = graph(), time.monotonic()
+        while time.monotonic() - since < QUIET and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
+            now = graph()
+            if now != last:
+                last, since = now, time.monotonic()
 
     def spin_until(self, condition, timeout: float = TIMEOUT, what: str = "a condition"):
         deadline = time.monotonic() + timeout
