@@ -64,6 +64,9 @@ use crate::{
 #[cfg(not(feature = "security"))]
 use crate::no_security::SecurityPluginsHandle;
 
+/// CompoSuite-ROS patch: how many reader or writer removals may wait for the event loop.
+const REMOVALS_CAPACITY: usize = 256;
+
 /// Builder object to create a [`DomainParticipant`] with non-default
 /// configuration.
 ///
@@ -1342,11 +1345,16 @@ impl DomainParticipantInner {
     // Adding readers. Capacities match the previous mio-extras channels.
     let (sender_add_reader, receiver_add_reader) =
       wake_channel::<ReaderIngredients>(100, &dp_waker);
-    let (sender_remove_reader, receiver_remove_reader) = wake_channel::<GUID>(4, &dp_waker);
+    // CompoSuite-ROS patch: removals get room for every endpoint a participant may drop at once
+    // (a process that shuts down drops all of its writers and readers together, faster than
+    // the event loop takes them; with room for 4, the rest failed with "Cannot remove").
+    let (sender_remove_reader, receiver_remove_reader) =
+      wake_channel::<GUID>(REMOVALS_CAPACITY, &dp_waker);
 
     // Writers
     let (add_writer_sender, add_writer_receiver) = wake_channel::<WriterIngredients>(10, &dp_waker);
-    let (remove_writer_sender, remove_writer_receiver) = wake_channel::<GUID>(4, &dp_waker);
+    let (remove_writer_sender, remove_writer_receiver) =
+      wake_channel::<GUID>(REMOVALS_CAPACITY, &dp_waker);
     let (reader_ready, reader_ready_rx) = ready_channel(&dp_waker);
     let (writer_ready, writer_ready_rx) = ready_channel(&dp_waker);
 
