@@ -40,7 +40,7 @@ class RclpyAgent:
         """Spin until the ROS graph this node sees has not changed for QUIET s (at most
         QUIET_MAX s). Deleting the node deletes its Fast DDS participant, and Fast DDS 2.14 (the
         Jazzy wheels') can deadlock there if a discovery callback runs at that moment: seen in
-        a CI run, the main thread spinning in DomainParticipant::set_listener(nullptr) called
+        a fresh-clone test run, the main thread spinning in DomainParticipant::set_listener(nullptr) called
         by rmw's destroy_participant, a receive thread blocked in
         MyRTPSParticipantListener::onWriterDiscovery — for good, with the GIL held. Those
         callbacks come while remote endpoints are still being discovered (a test that closes

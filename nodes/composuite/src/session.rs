@@ -250,9 +250,8 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
     }
 }
 
-/// The session's row of an episode, in the table `composuite bag episodes` recomputes from
-/// the bag.
-/// The table's row for the session's `number`-th episode (1-based, as the progress printed it).
+/// The session's row for its `number`-th episode (1-based, as the progress printed it), in the
+/// table `composuite bag episodes` recomputes from the bag.
 fn row(namespace: &str, number: u32, o: &EpisodeOutcome) -> Episode {
     Episode {
         namespace: namespace.into(),
