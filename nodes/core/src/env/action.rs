@@ -8,7 +8,7 @@ use super::EnvError;
 
 /// How far the reference's joint goal moves per unit action (rad),
 /// docs/src/reference-facts.md §4.2.
-const REFERENCE_DELTA_SCALE: f64 = 0.05;
+pub(crate) const REFERENCE_DELTA_SCALE: f64 = 0.05;
 
 /// An opening change smaller than this (m) counts as "hold" when an absolute gripper command
 /// is translated into the reference's open/close sign.

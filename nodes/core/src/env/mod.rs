@@ -20,6 +20,7 @@ use std::fmt;
 use nalgebra::{Isometry3, Point3, Vector3};
 
 pub use action::Action;
+pub(crate) use action::REFERENCE_DELTA_SCALE;
 pub use layout::EpisodeLayout;
 pub use reset::{MAX_SEED, UNSEEDED, draw_object_start, sample_object_start};
 pub use world_state::WorldState;

@@ -68,9 +68,13 @@ mod clearance;
 mod grasp;
 mod motion;
 mod nudge;
+mod plan;
+mod planned;
 mod reach;
 mod script;
+mod track;
 
+pub use planned::{PlannedExpert, Stage, run_planned_episode};
 pub use script::{Expert, Phase};
 
 use crate::TaskSpec;

@@ -1,12 +1,12 @@
 //! Motion primitives: straight lines of the pads' centre turned into joint targets with the
 //! crate's IK, one per control step.
 
-use nalgebra::{SVector, UnitQuaternion, Vector3};
+use nalgebra::{Point3, SVector, UnitQuaternion, Vector3};
 
 use std::f64::consts::PI;
 
 use super::clearance::Clearance;
-use crate::kinematics::{IkResult, IkTarget, null_space_motion, solve_ik};
+use crate::kinematics::{IkResult, IkTarget, link_pose, null_space_motion, solve_ik};
 use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel};
 
 /// The pads' centre is this far above the grip site along the gripper's approach axis (m):
@@ -200,4 +200,14 @@ pub(super) fn reach_cost(
         }
         None => f64::INFINITY,
     }
+}
+
+/// The pads' centre and the grip site's orientation with the arm at `q`.
+pub(super) fn pads_at(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    let grip = link_pose(model, q, GRIP_SITE_LINK).expect("grip site link");
+    let pad = grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE);
+    (pad.coords, grip.rotation)
 }

@@ -9,8 +9,7 @@ use crate::TaskSpec;
 use crate::arena::{SHELF, TRASH_CAN, object_geometry, objective_arena};
 use crate::axes::{Object, Objective, Obstacle, Robot};
 use crate::env::{Action, Env};
-use crate::kinematics::link_pose;
-use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel, robot_model};
+use crate::physics::{ARM_DOF, RobotModel, robot_model};
 
 use super::clearance::{Clearance, MIN_CLEARANCE, best_clear};
 use super::grasp::{
@@ -18,8 +17,7 @@ use super::grasp::{
     gripper_orientation, open,
 };
 use super::motion::{
-    CONTROL_PERIOD, PAD_CENTRE_ABOVE_GRIP_SITE, pad_ik, pad_ik_clear, pad_ik_solutions, smoothstep,
-    steps,
+    CONTROL_PERIOD, pad_ik, pad_ik_clear, pad_ik_solutions, pads_at, smoothstep, steps,
 };
 use super::nudge;
 
@@ -1394,13 +1392,6 @@ impl Expert {
         self.pad = pad;
         self.orientation = orientation;
     }
-}
-
-/// The pads' centre and the grip site's orientation with the arm at `q`.
-fn pads_at(model: &RobotModel, q: &[f64; ARM_DOF]) -> (Vector3<f64>, UnitQuaternion<f64>) {
-    let grip = link_pose(model, q, GRIP_SITE_LINK).expect("grip site link");
-    let pad = grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE);
-    (pad.coords, grip.rotation)
 }
 
 /// The largest joint change (rad) between consecutive targets of `path` (starting at `q0`).

@@ -40,6 +40,23 @@ const PAD_GAP_AT_ZERO: f64 = 0.0371;
 /// (docs/src/reference-facts.md §4.4).
 pub const FINGER_OPEN: f64 = 0.020833;
 
+/// The reference maps its gripper command c linearly onto the actuator range: +1 aims the left
+/// finger at −0.020833 (past its closed stop), −1 at +0.0115 (its "open").
+const REFERENCE_FINGER_AIMS: (f64, f64) = (-0.020833, 0.0115);
+
+/// Where the reference's gripper command `c` (in [−1, 1]) aims the left finger (m).
+pub fn reference_finger_aim(c: f64) -> f64 {
+    let (closed, open) = REFERENCE_FINGER_AIMS;
+    open + (c + 1.0) / 2.0 * (closed - open)
+}
+
+/// The reference gripper command that aims the pads at a gap of `gap` (m); the inverse of
+/// [`reference_finger_aim`] and [`pad_gap`], not clamped.
+pub fn reference_command_for_gap(gap: f64) -> f64 {
+    let (closed, open) = REFERENCE_FINGER_AIMS;
+    2.0 * (finger_for_gap(gap) - open) / (closed - open) - 1.0
+}
+
 impl SimWorld {
     /// Command the gripper.
     pub fn set_gripper(&mut self, command: GripperCommand) {
@@ -79,11 +96,13 @@ impl SimWorld {
                     0.0
                 };
                 self.gripper_c = (self.gripper_c + step).clamp(-1.0, 1.0);
-                // The reference maps c linearly onto the actuator range: +1 aims the left finger
-                // at −0.020833 (past its closed stop), −1 at +0.0115 (its "open").
-                let (closed, open) = (-0.020833, 0.0115);
-                let q = open + (self.gripper_c + 1.0) / 2.0 * (closed - open);
-                ([q, -q], self.gripper.max_force)
+                (
+                    [
+                        reference_finger_aim(self.gripper_c),
+                        -reference_finger_aim(self.gripper_c),
+                    ],
+                    self.gripper.max_force,
+                )
             }
         }
     }

@@ -20,7 +20,11 @@ use crate::axes::Robot;
 
 pub use contacts::FingerContacts;
 pub use convert::{from_pose, to_pose};
-pub use gripper::{FINGER_OPEN, GripperCommand, finger_for_gap, pad_gap};
+pub use gripper::{
+    FINGER_OPEN, GripperCommand, finger_for_gap, pad_gap, reference_command_for_gap,
+    reference_finger_aim,
+};
+pub(crate) use servos::REFERENCE_KP;
 pub use servos::ServoMode;
 
 /// Handles of one arm in the world.

@@ -28,7 +28,7 @@ pub enum ServoMode {
 }
 
 /// The reference's joint-controller stiffness (1/s²); its damping is 2√kp (ζ = 1).
-const REFERENCE_KP: f64 = 50.0;
+pub(crate) const REFERENCE_KP: f64 = 50.0;
 
 impl SimWorld {
     /// Set arm joint targets (rad), used from the next physics step on, as given: absolute

@@ -1,0 +1,474 @@
+//! The expert as an agent acts (work in progress, issue 49): every action is the reference's
+//! 8 numbers, the arm's motions are planned in joint space (`plan.rs`) and followed through
+//! the reference's controller (`track.rs`), and the gripper is driven by the sign of a[7]
+//! alone. So far it does the objectives that carry the object and let it go (pick_place,
+//! trash_can); [`crate::expert::Expert`] stays the default until it does them all.
+//!
+//! Stages: approach (planned, to a pre-grasp the arm reaches with the least joint travel) →
+//! descend (a straight line of the pads into the grasp) → close → lift (straight up, until
+//! the object's bottom clears what lies between it and the goal) → carry (planned, to above
+//! the goal, the gripper turned about the vertical by whatever turn moves the joints least) →
+//! lower (pick_place) → release → retreat → hold. A grasp that did not lift the object is
+//! let go and the next candidate tried.
+
+use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
+
+use super::clearance::{Clearance, MIN_CLEARANCE};
+use super::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
+use super::motion::{pad_ik, pad_ik_solutions, pads_at};
+use super::plan::{Space, plan};
+use super::track::{Joints, Leg, Tracker, joint_distance};
+use crate::TaskSpec;
+use crate::arena::{ROBOT_BASE_POSITION, TRASH_CAN, object_geometry};
+use crate::axes::{Objective, Obstacle};
+use crate::env::{Action, Env};
+use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model};
+
+/// Control steps the gripper is given to open or close: its command moves 0.25 per step
+/// (8 steps end to end), and the fingers follow.
+const GRIP_STEPS: u32 = 10;
+/// Spacing (m) of the IK points along a straight line of the pads.
+const LINE_SPACING: f64 = 0.01;
+/// Tree nodes a planning request may grow before it gives up.
+const PLAN_NODES: usize = 3000;
+/// Grasp candidates tried per approach.
+const MAX_CANDIDATES: usize = 8;
+/// Top of bin 1's and bin 2's walls (m).
+const BIN_WALL_TOP: f64 = 0.90;
+/// Top of the object wall and the door (m).
+const OBJECT_WALL_TOP: f64 = 1.07;
+/// Top of the goal wall (m).
+const GOAL_WALL_TOP: f64 = 1.10;
+/// Top of the trash can's walls (m).
+const TRASH_CAN_TOP: f64 = 0.9855;
+/// How far (m) the carried object's bottom stays above what it passes over.
+const CARRY_CLEARANCE: f64 = 0.03;
+/// Top of bin 2's floor (m).
+const BIN2_FLOOR: f64 = 0.82;
+/// Gap (m) between the object's bottom and bin 2's floor when it is let go.
+const RELEASE_GAP: f64 = 0.02;
+/// The object must rise at least this far (m) with the lift for the grasp to count.
+const RISE_CHECK: f64 = 0.02;
+/// How far (m) the pads rise after letting go.
+const RETREAT: f64 = 0.08;
+/// The least clearance (m) a pre-grasp or the carry's end may keep from the arena: the
+/// fingers of a side grasp come within millimetres of the floor, and the model's spheres
+/// round them outwards.
+const LEAST_END_CLEARANCE: f64 = -0.005;
+/// Grasps tried in all.
+const MAX_ATTEMPTS: u32 = 3;
+/// Turns (rad) of the gripper about the vertical tried for the carry's end, besides the turn
+/// of the arm's base from the object to the goal.
+const CARRY_TURNS: [f64; 7] = [0.0, -0.3, 0.3, -0.6, 0.6, -0.9, 0.9];
+
+/// The stages of an episode, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stage {
+    /// Not started, or about to try another grasp.
+    Start,
+    /// To the pre-grasp.
+    Approach,
+    /// The straight stretch into the grasp.
+    Descend,
+    /// Closing the fingers.
+    Close,
+    /// Straight up with the object.
+    Lift,
+    /// To above the goal.
+    Carry,
+    /// Down into bin 2.
+    Lower,
+    /// Opening the fingers.
+    Release,
+    /// Up and away from the object.
+    Retreat,
+    /// Holding still until the episode ends.
+    Done,
+}
+
+/// The planned expert of one task.
+pub struct PlannedExpert {
+    task: TaskSpec,
+    stage: Stage,
+    tracker: Option<Tracker>,
+    clearance: Clearance,
+    /// The reference gripper's command level, as this expert's own actions have moved it
+    /// (0 after a reset, ±0.25 per step, in [−1, 1]: −1 open, +1 closed).
+    gripper: f64,
+    /// The level the gripper is driven to.
+    gripper_goal: f64,
+    /// Steps left before the current stage may end (the gripper moving).
+    wait: u32,
+    /// The grasp being executed and the straight descent into it.
+    grasp: Option<Grasp>,
+    descent: Vec<Joints>,
+    /// The pads' offset from the object's origin once grasped (world frame, m).
+    held: Vector3<f64>,
+    /// The object's height when the lift began (m).
+    lift_start_z: f64,
+    /// Grasps tried so far.
+    attempts: u32,
+    /// Planning requests made (each seeds its own sampler).
+    requests: u32,
+}
+
+impl PlannedExpert {
+    /// The expert of `task`; call [`PlannedExpert::act`] once per control step.
+    pub fn new(task: TaskSpec) -> PlannedExpert {
+        PlannedExpert {
+            task,
+            stage: Stage::Start,
+            tracker: None,
+            clearance: Clearance::new(robot_model(task.robot), task.objective, task.obstacle),
+            gripper: 0.0,
+            gripper_goal: -1.0,
+            wait: 0,
+            grasp: None,
+            descent: Vec::new(),
+            held: Vector3::zeros(),
+            lift_start_z: 0.0,
+            attempts: 0,
+            requests: 0,
+        }
+    }
+
+    /// The stage the expert is in.
+    pub fn stage(&self) -> Stage {
+        self.stage
+    }
+
+    /// The next action (the reference's 8 numbers) for the environment's current state.
+    pub fn act(&mut self, env: &Env) -> Action {
+        let world = env.world();
+        let (q, v) = (world.arm_positions(), world.arm_velocities());
+        let physics = &env.config().physics;
+        self.tracker.get_or_insert_with(|| Tracker::new(physics, q));
+        // A stage that ends at once (nothing to move) lets the next one start this step.
+        for _ in 0..4 {
+            let tracker = self.tracker.as_ref().expect("made above");
+            if self.stage == Stage::Done || self.wait > 0 || !tracker.arrived(&q, &v) {
+                break;
+            }
+            self.advance(env, q);
+        }
+        let joints = self.tracker.as_mut().expect("made above").act(&q, &v);
+        self.wait = self.wait.saturating_sub(1);
+        let sign = if self.gripper < self.gripper_goal - 1e-9 {
+            1.0
+        } else if self.gripper > self.gripper_goal + 1e-9 {
+            -1.0
+        } else {
+            0.0
+        };
+        self.gripper = (self.gripper + 0.25 * sign).clamp(-1.0, 1.0);
+        let mut action = [0.0; 8];
+        action[..ARM_DOF].copy_from_slice(&joints);
+        action[7] = sign;
+        Action::Reference(action)
+    }
+
+    fn start(&mut self, leg: Leg) {
+        self.tracker.as_mut().expect("made in act").start(leg);
+    }
+
+    fn hold(&mut self, q: Joints) {
+        self.start(Leg::new(vec![q]));
+    }
+
+    /// Plan the next stage from what the environment shows now.
+    fn advance(&mut self, env: &Env, q: Joints) {
+        let model = env.world().model;
+        let obs = env.observation();
+        let object = Point3::from(obs.object.position);
+        let [x, y, z, w] = obs.object.orientation;
+        let rotation = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+        let bottom = object_geometry(self.task.object).bottom_offset;
+        match self.stage {
+            Stage::Start => {
+                if self.attempts >= MAX_ATTEMPTS {
+                    self.hold(q);
+                    self.stage = Stage::Done;
+                    return;
+                }
+                self.attempts += 1;
+                match self.plan_approach(env, q, object, rotation) {
+                    Some((path, grasp, descent)) => {
+                        self.gripper_goal = gripper_level(grasp.open);
+                        self.grasp = Some(grasp);
+                        self.descent = descent;
+                        self.start(Leg::new(path));
+                        self.stage = Stage::Approach;
+                    }
+                    None => {
+                        self.hold(q);
+                        self.stage = Stage::Done;
+                    }
+                }
+            }
+            Stage::Approach => {
+                let descent = std::mem::take(&mut self.descent);
+                self.start(Leg::new(descent));
+                self.stage = Stage::Descend;
+            }
+            Stage::Descend => {
+                self.gripper_goal = 1.0;
+                self.wait = GRIP_STEPS;
+                self.hold(q);
+                self.stage = Stage::Close;
+            }
+            Stage::Close => {
+                let (pad, orientation) = pads_at(model, &q);
+                self.held = pad - object.coords;
+                self.lift_start_z = object.z;
+                let wanted_bottom = self.carry_bottom();
+                let rise = (wanted_bottom - (object.z + bottom)).max(0.05);
+                let top = pad + Vector3::z() * rise;
+                match line(model, q, pad, top, orientation) {
+                    Some(points) => self.start(Leg::new(points)),
+                    None => self.hold(q),
+                }
+                self.stage = Stage::Lift;
+            }
+            Stage::Lift => {
+                if object.z - self.lift_start_z < RISE_CHECK {
+                    self.let_go(q);
+                    self.stage = Stage::Release;
+                    self.grasp = None;
+                    return;
+                }
+                match self.plan_carry(env, q) {
+                    Some(path) => self.start(Leg::new(path)),
+                    None => self.hold(q),
+                }
+                self.stage = Stage::Carry;
+            }
+            Stage::Carry => {
+                if self.task.objective == Objective::PickPlace {
+                    let (pad, orientation) = pads_at(model, &q);
+                    let drop = (object.z + bottom) - (BIN2_FLOOR + RELEASE_GAP);
+                    let low = pad - Vector3::z() * drop.max(0.0);
+                    match line(model, q, pad, low, orientation) {
+                        Some(points) => self.start(Leg::new(points)),
+                        None => self.hold(q),
+                    }
+                    self.stage = Stage::Lower;
+                } else {
+                    self.let_go(q);
+                    self.stage = Stage::Release;
+                }
+            }
+            Stage::Lower => {
+                self.let_go(q);
+                self.stage = Stage::Release;
+            }
+            Stage::Release => {
+                let (pad, orientation) = pads_at(model, &q);
+                let up = pad + Vector3::z() * RETREAT;
+                match line(model, q, pad, up, orientation) {
+                    Some(points) => self.start(Leg::new(points)),
+                    None => self.hold(q),
+                }
+                self.stage = Stage::Retreat;
+            }
+            Stage::Retreat => {
+                if self.grasp.is_none() {
+                    // The grasp failed: try again from here.
+                    self.stage = Stage::Start;
+                    self.hold(q);
+                } else {
+                    self.hold(q);
+                    self.stage = Stage::Done;
+                }
+            }
+            Stage::Done => {}
+        }
+    }
+
+    /// Open the fingers, the arm held where it is.
+    fn let_go(&mut self, q: Joints) {
+        self.gripper_goal = -1.0;
+        self.wait = GRIP_STEPS;
+        self.hold(q);
+    }
+
+    /// The height (m) the carried object's bottom clears everything on its way at.
+    fn carry_bottom(&self) -> f64 {
+        let mut top = BIN_WALL_TOP;
+        if self.task.objective == Objective::TrashCan {
+            top = top.max(TRASH_CAN_TOP);
+        }
+        top = match self.task.obstacle {
+            Obstacle::ObjectWall | Obstacle::ObjectDoor => top.max(OBJECT_WALL_TOP),
+            Obstacle::GoalWall => top.max(GOAL_WALL_TOP),
+            Obstacle::NoObstacle => top,
+        };
+        top + CARRY_CLEARANCE
+    }
+
+    /// A free path to a pre-grasp, the grasp, and the straight descent into it: of the
+    /// candidates the arm reaches clear of the arena, the one with the least joint travel.
+    fn plan_approach(
+        &mut self,
+        env: &Env,
+        q: Joints,
+        object: Point3<f64>,
+        rotation: UnitQuaternion<f64>,
+    ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
+        let model = env.world().model;
+        let candidates = grasp_candidates(&GraspInput {
+            model,
+            q,
+            object: self.task.object,
+            objective: self.task.objective,
+            obstacle: self.task.obstacle,
+            position: object,
+            rotation,
+            tilt: 0.0,
+            headings: Headings::TowardsBin2,
+        });
+        let mut options: Vec<(f64, Joints, Grasp, Vec<Joints>)> = Vec::new();
+        for grasp in candidates.into_iter().take(MAX_CANDIDATES) {
+            let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
+            solutions.truncate(4);
+            for pre in solutions {
+                if self.clearance.at(model, &pre) < LEAST_END_CLEARANCE {
+                    continue;
+                }
+                let Some(descent) = line(model, pre, grasp.pre(), grasp.pad, grasp.orientation)
+                else {
+                    continue;
+                };
+                options.push((joint_distance(&q, &pre), pre, grasp, descent));
+            }
+        }
+        options.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (_, pre, grasp, descent) in options {
+            if let Some(path) = self.plan_path(env, model, q, pre) {
+                return Some((path, grasp, descent));
+            }
+        }
+        None
+    }
+
+    /// A free path from the top of the lift to above the goal.
+    fn plan_carry(&mut self, env: &Env, q: Joints) -> Option<Vec<Joints>> {
+        let model = env.world().model;
+        let (pad, orientation) = pads_at(model, &q);
+        let object_now = pad - self.held;
+        let goal = match self.task.objective {
+            Objective::TrashCan => {
+                let [x, y, _] = TRASH_CAN.position;
+                Vector3::new(x, y, object_now.z)
+            }
+            _ => {
+                let g = env.goal();
+                Vector3::new(g.x, g.y, object_now.z)
+            }
+        };
+        // The base's own turn from the object to the goal turns the gripper with it.
+        let [bx, by, _] = ROBOT_BASE_POSITION;
+        let base_turn =
+            (goal.y - by).atan2(goal.x - bx) - (object_now.y - by).atan2(object_now.x - bx);
+        let mut best: Option<(f64, Joints)> = None;
+        for extra in CARRY_TURNS {
+            let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), base_turn + extra);
+            let target_pad = goal + turn * self.held;
+            let (solved, met) = pad_ik(model, &q, target_pad, turn * orientation);
+            if !met || self.clearance.at(model, &solved) < LEAST_END_CLEARANCE {
+                continue;
+            }
+            let cost = joint_distance(&q, &solved);
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, solved));
+            }
+        }
+        let (_, end) = best?;
+        self.plan_path(env, model, q, end)
+    }
+
+    /// A path from `from` to `to` keeping the arm clear of the arena.
+    fn plan_path(
+        &mut self,
+        env: &Env,
+        model: &RobotModel,
+        from: Joints,
+        to: Joints,
+    ) -> Option<Vec<Joints>> {
+        let clearance = &self.clearance;
+        // Ends close to the arena (a grasp low in the bin) may be as close on the way, no
+        // closer.
+        let least = MIN_CLEARANCE
+            .min(clearance.at(model, &from) - 1e-3)
+            .min(clearance.at(model, &to) - 1e-3);
+        let free = |c: &Joints| clearance.at(model, c) >= least;
+        let space = Space {
+            limits: limits(model),
+            free: &free,
+        };
+        self.requests += 1;
+        let seed = (env.seed() as u32)
+            .wrapping_mul(7919)
+            .wrapping_add(self.requests);
+        plan(&space, &from, &to, seed, PLAN_NODES)
+    }
+}
+
+/// The joint limits of the arm (±π for continuous joints).
+fn limits(model: &RobotModel) -> [(f64, f64); ARM_DOF] {
+    std::array::from_fn(|j| {
+        model.joints[j]
+            .limits
+            .unwrap_or((-std::f64::consts::PI, std::f64::consts::PI))
+    })
+}
+
+/// The reference gripper's command level for an opening `width` (m), in the 0.25 steps its
+/// command moves by (−1 fully open, +1 closed).
+fn gripper_level(width: f64) -> f64 {
+    ((reference_command_for_gap(width) * 4.0).round() / 4.0).clamp(-1.0, 1.0)
+}
+
+/// Joints along the straight line of the pads from `from` to `to` (the gripper turned to
+/// `orientation`), starting with `q`, each solved from the last: `None` where the IK does not
+/// meet a point.
+fn line(
+    model: &RobotModel,
+    q: Joints,
+    from: Vector3<f64>,
+    to: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> Option<Vec<Joints>> {
+    let n = ((to - from).norm() / LINE_SPACING).ceil().max(1.0) as usize;
+    let mut points = vec![q];
+    let mut last = q;
+    for k in 1..=n {
+        let p = from + (to - from) * (k as f64 / n as f64);
+        let (solved, met) = pad_ik(model, &last, p, orientation);
+        if !met {
+            return None;
+        }
+        points.push(solved);
+        last = solved;
+    }
+    Some(points)
+}
+
+/// Runs one episode of `task` with `seed` driven by the planned expert: whether it
+/// succeeded, and the steps to the first success.
+pub fn run_planned_episode(task: TaskSpec, seed: u64) -> (bool, Option<u32>) {
+    let mut env = Env::new(task, crate::env::EnvConfig::default());
+    if env.reset(seed).is_err() {
+        return (false, None);
+    }
+    let mut expert = PlannedExpert::new(task);
+    let mut first = None;
+    while env.ended().is_none() {
+        let action = expert.act(&env);
+        match env.step(&action) {
+            Ok(step) if step.info.success && first.is_none() => first = Some(env.steps()),
+            Ok(_) => {}
+            Err(_) => break,
+        }
+    }
+    (first.is_some(), first)
+}
