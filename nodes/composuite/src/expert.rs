@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use clap::Args;
 use composuite_core::axes::AxisElement;
-use composuite_core::expert::{EpisodeOutcome, run_episode};
+use composuite_core::expert::{EpisodeOutcome, run_episode, run_planned_episode};
 use composuite_core::{TaskSpec, all_tasks};
 use serde_json::json;
 
@@ -25,6 +25,7 @@ use serde_json::json;
 /// Examples:
 ///   composuite expert --robot IIWA --object box --episodes 3
 ///   composuite expert --tasks all --episodes 10 --out expert-results --json
+///   composuite expert --planned --objective pick_place --episodes 3
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct ExpertArgs {
@@ -53,6 +54,10 @@ pub struct ExpertArgs {
     /// Folder for results.csv, summary.txt and success.png.
     #[arg(long, default_value = "expert-results")]
     out: PathBuf,
+    /// Run the planned expert instead (work in progress, issue 49): it acts as an agent does,
+    /// with the reference's 8 numbers, on motions planned in joint space.
+    #[arg(long)]
+    planned: bool,
     /// Print JSON: {"mean_success", "tasks": [{"task", "success_rate", "mean_return", "mean_length"}, ...]}.
     #[arg(long)]
     json: bool,
@@ -129,7 +134,11 @@ pub fn run(args: &ExpertArgs) -> Result<(), String> {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(&(t, seed)) = jobs.get(i) else { break };
-                    let outcome = run_episode(tasks[t], seed);
+                    let outcome = if args.planned {
+                        run_planned_episode(tasks[t], seed)
+                    } else {
+                        run_episode(tasks[t], seed)
+                    };
                     results
                         .lock()
                         .expect("no worker panics while holding the lock")[t]

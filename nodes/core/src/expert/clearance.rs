@@ -7,8 +7,8 @@
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use crate::arena::{Placed, Primitive, arena_parts};
-use crate::axes::{Objective, Obstacle};
+use crate::arena::{Placed, Primitive, arena_parts, object_parts};
+use crate::axes::{Object, Objective, Obstacle};
 use crate::kinematics::body_poses;
 use crate::physics::{ARM_DOF, RobotModel, Shape};
 
@@ -24,6 +24,8 @@ struct Sphere {
     /// Whether the body can move with the gripper held still: every link before the last
     /// arm joint (not the hand and the fingers).
     swings: bool,
+    /// Whether the body is a finger (which a grasp brings close to the floor on purpose).
+    finger: bool,
 }
 
 /// An arena solid as an oriented box.
@@ -34,6 +36,7 @@ struct Solid {
 }
 
 /// The spheres of one arm and the solids of one arena.
+#[derive(Clone)]
 pub(super) struct Clearance {
     spheres: Vec<Sphere>,
     solids: Vec<Solid>,
@@ -47,6 +50,7 @@ impl Clearance {
             .iter()
             .map(|j| j.child)
             .collect();
+        let fingers: Vec<usize> = model.joints[ARM_DOF..].iter().map(|j| j.child).collect();
         // Body 0 is the fixed base on its pedestal, far from everything.
         for (body, b) in model.bodies.iter().enumerate().skip(1) {
             for c in &b.collisions {
@@ -56,6 +60,7 @@ impl Clearance {
                         centre: c.pose * centre,
                         radius,
                         swings: !hand.contains(&body),
+                        finger: fingers.contains(&body),
                     });
                 }
             }
@@ -66,6 +71,45 @@ impl Clearance {
             .map(solid)
             .collect();
         Clearance { spheres, solids }
+    }
+
+    /// The same arena with the object's solids added at `pose`, as something to keep clear of
+    /// on the way to a grasp.
+    pub fn with_object(&self, object: Object, pose: &Isometry3<f64>) -> Clearance {
+        let mut more = self.clone();
+        more.solids.extend(object_parts(object).iter().map(|part| {
+            solid(&Placed {
+                pose: pose * part.pose,
+                ..*part
+            })
+        }));
+        more
+    }
+
+    /// The same arena with the arm holding the object: the object (at `object_pose` with the
+    /// arm at `q`) moves with the hand from then on, covered by spheres of its own.
+    pub fn holding(
+        &self,
+        model: &RobotModel,
+        q: &[f64; ARM_DOF],
+        object: Object,
+        object_pose: &Isometry3<f64>,
+    ) -> Clearance {
+        let mut more = self.clone();
+        let hand = model.joints[ARM_DOF - 1].child;
+        let to_hand = body_poses(model, q, [0.0, 0.0])[hand].inverse() * object_pose;
+        for part in object_parts(object) {
+            for (centre, radius) in held_cover(&part.shape) {
+                more.spheres.push(Sphere {
+                    body: hand,
+                    centre: to_hand * part.pose * centre,
+                    radius,
+                    swings: false,
+                    finger: false,
+                });
+            }
+        }
+        more
     }
 
     /// How crowded the links that can swing with the gripper held still are at `q`: the sum over
@@ -86,6 +130,16 @@ impl Clearance {
         let poses = body_poses(model, q, [0.0, 0.0]);
         self.spheres
             .iter()
+            .map(|s| self.sphere_gap(&poses, s))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The smallest gap (m) between the arm at `q` and the arena, the fingers left out.
+    pub fn without_fingers(&self, model: &RobotModel, q: &[f64; ARM_DOF]) -> f64 {
+        let poses = body_poses(model, q, [0.0, 0.0]);
+        self.spheres
+            .iter()
+            .filter(|s| !s.finger)
             .map(|s| self.sphere_gap(&poses, s))
             .fold(f64::INFINITY, f64::min)
     }
@@ -151,6 +205,52 @@ fn cover(shape: &Shape) -> Vec<(Point3<f64>, f64)> {
             out
         }
     }
+}
+
+/// The smallest sphere (m) covering a held object's thin parts: one sphere per 1.5 cm of a
+/// plate's disc instead of one per 3 mm.
+const HELD_SPHERE: f64 = 0.015;
+
+/// Spheres (centre in the primitive's frame, radius) covering an object's primitive within a
+/// few mm: over its two larger extents, each at least [`HELD_SPHERE`].
+fn held_cover(shape: &Primitive) -> Vec<(Point3<f64>, f64)> {
+    let (half, round) = match *shape {
+        Primitive::Box { half_extents } => (half_extents, false),
+        Primitive::Cylinder {
+            radius,
+            half_length,
+        } => (Vector3::new(radius, radius, half_length), true),
+    };
+    let (axis, thin) = (0..3)
+        .map(|i| (i, half[i]))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("three axes");
+    let r = thin.max(HELD_SPHERE);
+    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+    let ticks = |h: f64| {
+        let n = ((2.0 * (h - 0.5 * r).max(0.0)) / r).ceil() as usize;
+        (0..=n).map(move |k| {
+            if n == 0 {
+                0.0
+            } else {
+                -(h - 0.5 * r) + 2.0 * (h - 0.5 * r) * k as f64 / n as f64
+            }
+        })
+    };
+    let mut out = Vec::new();
+    for a in ticks(half[u]) {
+        for b in ticks(half[v]) {
+            // A disc's corners are empty.
+            if round && (a * a + b * b).sqrt() > half[u] {
+                continue;
+            }
+            let mut p = Vector3::zeros();
+            p[u] = a;
+            p[v] = b;
+            out.push((Point3::from(p), r));
+        }
+    }
+    out
 }
 
 /// An arena part as an oriented box (a cylinder by its bounding box).

@@ -11,8 +11,11 @@
 //! lower (pick_place) → release → retreat → hold. A grasp that did not lift the object is
 //! let go and the next candidate tried.
 
-use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
+use std::collections::VecDeque;
 
+use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
+
+use super::EpisodeOutcome;
 use super::clearance::{Clearance, MIN_CLEARANCE};
 use super::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
 use super::motion::{pad_ik, pad_ik_solutions, pads_at};
@@ -35,20 +38,28 @@ const PLAN_NODES: usize = 3000;
 const MAX_CANDIDATES: usize = 8;
 /// Top of bin 1's and bin 2's walls (m).
 const BIN_WALL_TOP: f64 = 0.90;
-/// Top of the object wall and the door (m).
-const OBJECT_WALL_TOP: f64 = 1.07;
-/// Top of the goal wall (m).
-const GOAL_WALL_TOP: f64 = 1.10;
 /// Top of the trash can's walls (m).
 const TRASH_CAN_TOP: f64 = 0.9855;
-/// How far (m) the carried object's bottom stays above what it passes over.
-const CARRY_CLEARANCE: f64 = 0.03;
+/// How far (m) the object's bottom is above the walls of what it is dropped into.
+const DROP_CLEARANCE: f64 = 0.03;
 /// Top of bin 2's floor (m).
 const BIN2_FLOOR: f64 = 0.82;
-/// Gap (m) between the object's bottom and bin 2's floor when it is let go.
-const RELEASE_GAP: f64 = 0.02;
+/// Where the object's origin is lowered to in bin 2 (m): 3 cm under the 0.9 m line below which
+/// it counts as in the bin.
+const IN_BIN_Z: f64 = 0.87;
+/// How far (m) the pads rise for a push: the object slides just off the floor, far under the
+/// 0.9 m line whose crossing ends a Push episode.
+const PUSH_LIFT: f64 = 0.012;
+/// The object must rise at least this far (m) with a push's lift for the grasp to count.
+const PUSH_RISE_CHECK: f64 = 0.006;
+/// The goal wall's line (y, m; on the seam between the bins) and a point past its free end
+/// (which is at x 0.11) that a pushed object goes round by (x, m).
+const GOAL_WALL_Y: f64 = -0.01;
+const AROUND_GOAL_WALL_X: f64 = 0.22;
+/// How far (m) the pads rise straight from the grasp before the carry: off the floor.
+const LIFT: f64 = 0.04;
 /// The object must rise at least this far (m) with the lift for the grasp to count.
-const RISE_CHECK: f64 = 0.02;
+const RISE_CHECK: f64 = 0.025;
 /// How far (m) the pads rise after letting go.
 const RETREAT: f64 = 0.08;
 /// The least clearance (m) a pre-grasp or the carry's end may keep from the arena: the
@@ -76,7 +87,7 @@ pub enum Stage {
     Lift,
     /// To above the goal.
     Carry,
-    /// Down into bin 2.
+    /// Into bin 2 (pick_place), still holding the object.
     Lower,
     /// Opening the fingers.
     Release,
@@ -99,6 +110,8 @@ pub struct PlannedExpert {
     gripper_goal: f64,
     /// Steps left before the current stage may end (the gripper moving).
     wait: u32,
+    /// Legs of the current stage still to run after the one running.
+    queue: VecDeque<Leg>,
     /// The grasp being executed and the straight descent into it.
     grasp: Option<Grasp>,
     descent: Vec<Joints>,
@@ -123,6 +136,7 @@ impl PlannedExpert {
             gripper: 0.0,
             gripper_goal: -1.0,
             wait: 0,
+            queue: VecDeque::new(),
             grasp: None,
             descent: Vec::new(),
             held: Vector3::zeros(),
@@ -149,7 +163,10 @@ impl PlannedExpert {
             if self.stage == Stage::Done || self.wait > 0 || !tracker.arrived(&q, &v) {
                 break;
             }
-            self.advance(env, q);
+            match self.queue.pop_front() {
+                Some(leg) => self.start(leg),
+                None => self.advance(env, q),
+            }
         }
         let joints = self.tracker.as_mut().expect("made above").act(&q, &v);
         self.wait = self.wait.saturating_sub(1);
@@ -192,11 +209,12 @@ impl PlannedExpert {
                 }
                 self.attempts += 1;
                 match self.plan_approach(env, q, object, rotation) {
-                    Some((path, grasp, descent)) => {
+                    Some((mut legs, grasp, descent)) => {
                         self.gripper_goal = gripper_level(grasp.open);
                         self.grasp = Some(grasp);
                         self.descent = descent;
-                        self.start(Leg::new(path));
+                        self.start(legs.remove(0));
+                        self.queue.extend(legs);
                         self.stage = Stage::Approach;
                     }
                     None => {
@@ -220,9 +238,8 @@ impl PlannedExpert {
                 let (pad, orientation) = pads_at(model, &q);
                 self.held = pad - object.coords;
                 self.lift_start_z = object.z;
-                let wanted_bottom = self.carry_bottom();
-                let rise = (wanted_bottom - (object.z + bottom)).max(0.05);
-                let top = pad + Vector3::z() * rise;
+                let lift = if self.pushing() { PUSH_LIFT } else { LIFT };
+                let top = pad + Vector3::z() * lift;
                 match line(model, q, pad, top, orientation) {
                     Some(points) => self.start(Leg::new(points)),
                     None => self.hold(q),
@@ -230,34 +247,44 @@ impl PlannedExpert {
                 self.stage = Stage::Lift;
             }
             Stage::Lift => {
-                if object.z - self.lift_start_z < RISE_CHECK {
+                let rise_check = if self.pushing() {
+                    PUSH_RISE_CHECK
+                } else {
+                    RISE_CHECK
+                };
+                if object.z - self.lift_start_z < rise_check {
                     self.let_go(q);
                     self.stage = Stage::Release;
                     self.grasp = None;
                     return;
                 }
-                match self.plan_carry(env, q) {
-                    Some(path) => self.start(Leg::new(path)),
+                let legs = if self.pushing() {
+                    self.plan_slide(env, q, object)
+                } else {
+                    self.plan_carry(env, q).map(|path| vec![Leg::new(path)])
+                };
+                match legs {
+                    Some(mut legs) => {
+                        self.start(legs.remove(0));
+                        self.queue.extend(legs);
+                    }
                     None => self.hold(q),
                 }
                 self.stage = Stage::Carry;
             }
-            Stage::Carry => {
-                if self.task.objective == Objective::PickPlace {
-                    let (pad, orientation) = pads_at(model, &q);
-                    let drop = (object.z + bottom) - (BIN2_FLOOR + RELEASE_GAP);
-                    let low = pad - Vector3::z() * drop.max(0.0);
-                    match line(model, q, pad, low, orientation) {
-                        Some(points) => self.start(Leg::new(points)),
-                        None => self.hold(q),
-                    }
-                    self.stage = Stage::Lower;
-                } else {
-                    self.let_go(q);
-                    self.stage = Stage::Release;
+            Stage::Carry if self.task.objective == Objective::PickPlace => {
+                // Success needs the object below bin 2's wall tops with the gripper near it:
+                // lowered there, not dropped.
+                let (pad, orientation) = pads_at(model, &q);
+                let floor_gap = object.z + bottom - (BIN2_FLOOR + 0.01);
+                let depth = (object.z - IN_BIN_Z).clamp(0.0, floor_gap.max(0.0));
+                match line(model, q, pad, pad - Vector3::z() * depth, orientation) {
+                    Some(points) => self.start(Leg::new(points)),
+                    None => self.hold(q),
                 }
+                self.stage = Stage::Lower;
             }
-            Stage::Lower => {
+            Stage::Carry | Stage::Lower => {
                 self.let_go(q);
                 self.stage = Stage::Release;
             }
@@ -291,30 +318,65 @@ impl PlannedExpert {
         self.hold(q);
     }
 
-    /// The height (m) the carried object's bottom clears everything on its way at.
-    fn carry_bottom(&self) -> f64 {
-        let mut top = BIN_WALL_TOP;
-        if self.task.objective == Objective::TrashCan {
-            top = top.max(TRASH_CAN_TOP);
-        }
-        top = match self.task.obstacle {
-            Obstacle::ObjectWall | Obstacle::ObjectDoor => top.max(OBJECT_WALL_TOP),
-            Obstacle::GoalWall => top.max(GOAL_WALL_TOP),
-            Obstacle::NoObstacle => top,
-        };
-        top + CARRY_CLEARANCE
+    /// Whether the objective is Push (the object slides just off the floor).
+    fn pushing(&self) -> bool {
+        self.task.objective == Objective::Push
     }
 
-    /// A free path to a pre-grasp, the grasp, and the straight descent into it: of the
-    /// candidates the arm reaches clear of the arena, the one with the least joint travel.
+    /// Push: the pads along straight lines that take the object, just off the floor, to the
+    /// goal (round the goal wall's free end where the wall stands between them), the gripper
+    /// as it is. Not checked against the arena yet: past the goal wall the forearm runs into
+    /// the wall (a line of the pads cannot swing the elbow out of its way).
+    fn plan_slide(&mut self, env: &Env, q: Joints, object: Point3<f64>) -> Option<Vec<Leg>> {
+        let model = env.world().model;
+        let goal = env.goal();
+        let mut stops = Vec::new();
+        if self.task.obstacle == Obstacle::GoalWall
+            && goal.y > GOAL_WALL_Y
+            && object.y < GOAL_WALL_Y
+        {
+            stops.push(Vector3::new(AROUND_GOAL_WALL_X, GOAL_WALL_Y, object.z));
+        }
+        stops.push(Vector3::new(goal.x, goal.y, object.z));
+        let (mut pad, orientation) = pads_at(model, &q);
+        let offset = pad - object.coords;
+        let mut from = q;
+        let mut legs = Vec::new();
+        for stop in stops {
+            let to = stop + offset;
+            let points = line(model, from, pad, to, orientation)?;
+            from = *points.last().expect("a point");
+            pad = to;
+            legs.push(Leg::new(points));
+        }
+        Some(legs)
+    }
+
+    /// The height (m) of the object's bottom where it is let go: just over bin 2's walls or
+    /// the trash can's.
+    fn drop_bottom(&self) -> f64 {
+        let top = match self.task.objective {
+            Objective::TrashCan => TRASH_CAN_TOP,
+            _ => BIN_WALL_TOP,
+        };
+        top + DROP_CLEARANCE
+    }
+
+    /// The legs to a pre-grasp (a free path; for a side grasp to above it, then straight
+    /// down), the grasp, and the straight descent into it: of the candidates the arm reaches
+    /// clear of the arena and the object, the one with the least joint travel.
     fn plan_approach(
         &mut self,
         env: &Env,
         q: Joints,
         object: Point3<f64>,
         rotation: UnitQuaternion<f64>,
-    ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
+    ) -> Option<(Vec<Leg>, Grasp, Vec<Joints>)> {
         let model = env.world().model;
+        let around = self.clearance.with_object(
+            self.task.object,
+            &Isometry3::from_parts(object.coords.into(), rotation),
+        );
         let candidates = grasp_candidates(&GraspInput {
             model,
             q,
@@ -331,59 +393,79 @@ impl PlannedExpert {
             let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
             solutions.truncate(4);
             for pre in solutions {
-                if self.clearance.at(model, &pre) < LEAST_END_CLEARANCE {
+                if around.at(model, &pre) < LEAST_END_CLEARANCE {
                     continue;
                 }
                 let Some(descent) = line(model, pre, grasp.pre(), grasp.pad, grasp.orientation)
                 else {
                     continue;
                 };
+                // Only the fingers may come close to the floor on the way in.
+                let arm_gap = descent
+                    .iter()
+                    .map(|c| self.clearance.without_fingers(model, c))
+                    .fold(f64::INFINITY, f64::min);
+                if arm_gap < 0.0 {
+                    continue;
+                }
                 options.push((joint_distance(&q, &pre), pre, grasp, descent));
             }
         }
         options.sort_by(|a, b| a.0.total_cmp(&b.0));
         for (_, pre, grasp, descent) in options {
-            if let Some(path) = self.plan_path(env, model, q, pre) {
-                return Some((path, grasp, descent));
+            if let Some(path) = self.plan_path(env, model, &around, q, pre) {
+                return Some((vec![Leg::new(path)], grasp, descent));
             }
         }
         None
     }
 
-    /// A free path from the top of the lift to above the goal.
+    /// A free path, the object carried, from just off the floor to where it is let go: above
+    /// the goal, its bottom clear of what it drops into. Of the turns of the gripper about the
+    /// vertical, the one moving the joints least.
     fn plan_carry(&mut self, env: &Env, q: Joints) -> Option<Vec<Joints>> {
         let model = env.world().model;
+        let obs = env.observation();
+        let [x, y, z, w] = obs.object.orientation;
+        let object_pose = Isometry3::from_parts(
+            Vector3::from(obs.object.position).into(),
+            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+        );
+        let carrying = self
+            .clearance
+            .holding(model, &q, self.task.object, &object_pose);
         let (pad, orientation) = pads_at(model, &q);
         let object_now = pad - self.held;
+        let origin_z = self.drop_bottom() - object_geometry(self.task.object).bottom_offset;
         let goal = match self.task.objective {
             Objective::TrashCan => {
                 let [x, y, _] = TRASH_CAN.position;
-                Vector3::new(x, y, object_now.z)
+                Vector3::new(x, y, origin_z)
             }
             _ => {
                 let g = env.goal();
-                Vector3::new(g.x, g.y, object_now.z)
+                Vector3::new(g.x, g.y, origin_z)
             }
         };
         // The base's own turn from the object to the goal turns the gripper with it.
         let [bx, by, _] = ROBOT_BASE_POSITION;
         let base_turn =
             (goal.y - by).atan2(goal.x - bx) - (object_now.y - by).atan2(object_now.x - bx);
-        let mut best: Option<(f64, Joints)> = None;
+        let mut ends: Vec<(f64, Joints)> = Vec::new();
         for extra in CARRY_TURNS {
             let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), base_turn + extra);
-            let target_pad = goal + turn * self.held;
-            let (solved, met) = pad_ik(model, &q, target_pad, turn * orientation);
-            if !met || self.clearance.at(model, &solved) < LEAST_END_CLEARANCE {
-                continue;
-            }
-            let cost = joint_distance(&q, &solved);
-            if best.is_none_or(|(c, _)| cost < c) {
-                best = Some((cost, solved));
+            let (solved, met) = pad_ik(model, &q, goal + turn * self.held, turn * orientation);
+            if met && carrying.at(model, &solved) >= LEAST_END_CLEARANCE {
+                ends.push((joint_distance(&q, &solved), solved));
             }
         }
-        let (_, end) = best?;
-        self.plan_path(env, model, q, end)
+        ends.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (_, end) in ends.into_iter().take(3) {
+            if let Some(path) = self.plan_path(env, model, &carrying, q, end) {
+                return Some(path);
+            }
+        }
+        None
     }
 
     /// A path from `from` to `to` keeping the arm clear of the arena.
@@ -391,10 +473,10 @@ impl PlannedExpert {
         &mut self,
         env: &Env,
         model: &RobotModel,
+        clearance: &Clearance,
         from: Joints,
         to: Joints,
     ) -> Option<Vec<Joints>> {
-        let clearance = &self.clearance;
         // Ends close to the arena (a grasp low in the bin) may be as close on the way, no
         // closer.
         let least = MIN_CLEARANCE
@@ -453,22 +535,26 @@ fn line(
     Some(points)
 }
 
-/// Runs one episode of `task` with `seed` driven by the planned expert: whether it
-/// succeeded, and the steps to the first success.
-pub fn run_planned_episode(task: TaskSpec, seed: u64) -> (bool, Option<u32>) {
+/// Runs one episode of `task` with `seed` (default config) driven by the planned expert.
+pub fn run_planned_episode(task: TaskSpec, seed: u64) -> EpisodeOutcome {
     let mut env = Env::new(task, crate::env::EnvConfig::default());
+    let mut outcome = EpisodeOutcome {
+        success: false,
+        ret: 0.0,
+        length: 0,
+    };
     if env.reset(seed).is_err() {
-        return (false, None);
+        return outcome;
     }
     let mut expert = PlannedExpert::new(task);
-    let mut first = None;
     while env.ended().is_none() {
         let action = expert.act(&env);
         match env.step(&action) {
-            Ok(step) if step.info.success && first.is_none() => first = Some(env.steps()),
-            Ok(_) => {}
+            Ok(step) => outcome.success |= step.info.success,
             Err(_) => break,
         }
     }
-    (first.is_some(), first)
+    outcome.ret = env.episode_return();
+    outcome.length = env.steps();
+    outcome
 }

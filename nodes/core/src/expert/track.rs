@@ -36,9 +36,13 @@ const DISTURBANCE_RATE: f64 = 0.3;
 const ARRIVED_POSITION: f64 = 0.004;
 /// …and slower than this (rad/s).
 const ARRIVED_SPEED: f64 = 0.02;
-/// Steps after a leg's planned end at which it counts as over even if not arrived (a contact
-/// holding the arm back).
-const SETTLE_STEPS: u32 = 30;
+/// Steps after a leg's planned end at which it counts as over even if not arrived.
+const SETTLE_STEPS: u32 = 40;
+/// After its planned end, a leg is also over once no joint has moved more than this (rad/s)
+/// for [`STALL_STEPS`] steps: a contact holds the arm back.
+const STALL_SPEED: f64 = 0.01;
+/// See [`STALL_SPEED`].
+const STALL_STEPS: u32 = 3;
 
 /// One joint under the reference's controller over one control step, the goal offset `g`
 /// (rad, 0.05·a) held: q' = q + alpha·g + beta·q̇ and q̇' = gamma·q̇ + delta·g.
@@ -211,6 +215,9 @@ pub(crate) struct Tracker {
     disturbance: Joints,
     /// The state and goal offsets of the last step, to learn the disturbance from.
     last: Option<(Joints, Joints)>,
+    /// Steps in a row, after the leg's planned end, with every joint slower than
+    /// [`STALL_SPEED`].
+    stalled: u32,
 }
 
 impl Tracker {
@@ -222,6 +229,7 @@ impl Tracker {
             steps: 0,
             disturbance: [0.0; ARM_DOF],
             last: None,
+            stalled: 0,
         }
     }
 
@@ -230,6 +238,7 @@ impl Tracker {
     pub fn start(&mut self, leg: Leg) {
         self.leg = leg;
         self.steps = 0;
+        self.stalled = 0;
     }
 
     /// The leg being run.
@@ -245,7 +254,7 @@ impl Tracker {
     }
 
     /// Whether the leg is over: its time has run and the arm has arrived (or has had
-    /// [`SETTLE_STEPS`] to).
+    /// [`SETTLE_STEPS`] to, or has stalled short of it).
     pub fn arrived(&self, q: &Joints, v: &Joints) -> bool {
         let planned = (self.leg.duration() / self.response.period).ceil() as u32;
         if self.steps < planned {
@@ -254,7 +263,7 @@ impl Tracker {
         let end = self.leg.end();
         let close = joint_distance(q, &end) <= ARRIVED_POSITION
             && v.iter().all(|s| s.abs() <= ARRIVED_SPEED);
-        close || self.steps >= planned + SETTLE_STEPS
+        close || self.stalled >= STALL_STEPS || self.steps >= planned + SETTLE_STEPS
     }
 
     /// The normalised joint actions (in [−1, 1]) for the arm measured at `q`, `v`.
@@ -269,6 +278,12 @@ impl Tracker {
                 // A joint against a limit or a wall: no more than the goal offset can undo.
                 *d = d.clamp(-r.delta * limit, r.delta * limit);
             }
+        }
+        let planned = (self.leg.duration() / r.period).ceil() as u32;
+        if self.steps >= planned && v.iter().all(|s| s.abs() < STALL_SPEED) {
+            self.stalled += 1;
+        } else {
+            self.stalled = 0;
         }
         self.steps += 1;
         let (q_ref, v_ref) = self.leg.at(self.steps as f64 * r.period);
