@@ -12,6 +12,7 @@
 //! let go and the next candidate tried.
 
 use std::collections::VecDeque;
+use std::f64::consts::FRAC_PI_2;
 
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 
@@ -34,6 +35,8 @@ const GRIP_STEPS: u32 = 10;
 const LINE_SPACING: f64 = 0.01;
 /// Tree nodes a planning request may grow before it gives up.
 const PLAN_NODES: usize = 3000;
+/// The longest straight stretch (m) into a top grasp.
+const TOP_BACKOFF: f64 = 0.06;
 /// Grasp candidates tried per approach.
 const MAX_CANDIDATES: usize = 8;
 /// Top of bin 1's and bin 2's walls (m).
@@ -56,6 +59,22 @@ const PUSH_RISE_CHECK: f64 = 0.006;
 /// (which is at x 0.11) that a pushed object goes round by (x, m).
 const GOAL_WALL_Y: f64 = -0.01;
 const AROUND_GOAL_WALL_X: f64 = 0.22;
+/// Lanes (x, m) across the shelf's opening (x −0.1…0.3) the object may go in along.
+const SHELF_LANES_X: [f64; 4] = [0.1, 0.17, 0.03, 0.24];
+/// Turns (rad) of the gripper about the vertical in front of the shelf, tried with each lane.
+const SHELF_YAWS: [f64; 3] = [0.0, 0.35, -0.35];
+/// How far (rad) the gripper may still point down as it goes into the shelf: each 0.1 rad is
+/// 0.1 rad less for the wrist to turn on the way (~13 control steps); the clearance model
+/// decides how far its housing clears the top block.
+const SHELF_PITCHES: [f64; 4] = [0.6, 0.4, 0.2, 0.0];
+/// Where the object's origin waits in front of the shelf (y, m; its front is at 0.14) and
+/// where it is slid to (inside the 0.18…0.33 success band, short of the back panel at 0.32).
+const SHELF_FRONT_Y: f64 = 0.07;
+const SHELF_INSERT_Y: f64 = 0.25;
+/// The object's origin's height while it goes in (m): in the 0.945…1.095 success band, its
+/// bottom clear of the board (top 0.945) and the gripper's housing clear of the top block
+/// (bottom 1.10).
+const SHELF_INSERT_Z: f64 = 1.0;
 /// How far (m) the pads rise straight from the grasp before the carry: off the floor.
 const LIFT: f64 = 0.04;
 /// The object must rise at least this far (m) with the lift for the grasp to count.
@@ -260,6 +279,8 @@ impl PlannedExpert {
                 }
                 let legs = if self.pushing() {
                     self.plan_slide(env, q, object)
+                } else if self.task.objective == Objective::Shelf {
+                    self.plan_shelf(env, q)
                 } else {
                     self.plan_carry(env, q).map(|path| vec![Leg::new(path)])
                 };
@@ -267,10 +288,14 @@ impl PlannedExpert {
                     Some(mut legs) => {
                         self.start(legs.remove(0));
                         self.queue.extend(legs);
+                        self.stage = Stage::Carry;
                     }
-                    None => self.hold(q),
+                    None => {
+                        // Nowhere to take it: hold it rather than drop it back.
+                        self.hold(q);
+                        self.stage = Stage::Done;
+                    }
                 }
-                self.stage = Stage::Carry;
             }
             Stage::Carry if self.task.objective == Objective::PickPlace => {
                 // Success needs the object below bin 2's wall tops with the gripper near it:
@@ -290,7 +315,13 @@ impl PlannedExpert {
             }
             Stage::Release => {
                 let (pad, orientation) = pads_at(model, &q);
-                let up = pad + Vector3::z() * RETREAT;
+                // Out of the shelf backwards (its top block is above), else straight up.
+                let away = if self.task.objective == Objective::Shelf && self.grasp.is_some() {
+                    -Vector3::y()
+                } else {
+                    Vector3::z()
+                };
+                let up = pad + away * RETREAT;
                 match line(model, q, pad, up, orientation) {
                     Some(points) => self.start(Leg::new(points)),
                     None => self.hold(q),
@@ -352,6 +383,67 @@ impl PlannedExpert {
         Some(legs)
     }
 
+    /// Shelf: a free path, the object carried, to in front of the shelf's opening with the
+    /// gripper turned from pointing down to pointing into the shelf (+y, a quarter turn about
+    /// x: a top grasp closes along x for this), then straight in. Of the lanes across the
+    /// opening and small turns about the vertical, the first the arm reaches clear of the
+    /// arena, slide included.
+    fn plan_shelf(&mut self, env: &Env, q: Joints) -> Option<Vec<Leg>> {
+        let model = env.world().model;
+        let obs = env.observation();
+        let [x, y, z, w] = obs.object.orientation;
+        let object_pose = Isometry3::from_parts(
+            Vector3::from(obs.object.position).into(),
+            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+        );
+        let carrying = self
+            .clearance
+            .holding(model, &q, self.task.object, &object_pose);
+        let (_, orientation) = pads_at(model, &q);
+        let mut options: Vec<(f64, Joints, Vec<Joints>)> = Vec::new();
+        for (lane, yaw, pitch) in SHELF_LANES_X.into_iter().flat_map(|lane| {
+            SHELF_YAWS
+                .into_iter()
+                .flat_map(move |yaw| SHELF_PITCHES.map(|pitch| (lane, yaw, pitch)))
+        }) {
+            {
+                // From pointing down to pointing into the shelf, still `pitch` below level.
+                let into_shelf =
+                    UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2 - pitch);
+                let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * into_shelf;
+                let front = Vector3::new(lane, SHELF_FRONT_Y, SHELF_INSERT_Z);
+                let inside = Vector3::new(lane, SHELF_INSERT_Y, SHELF_INSERT_Z);
+                let (pad_front, pad_inside) = (front + turn * self.held, inside + turn * self.held);
+                // A quarter turn of the wrist is too far for the IK seeded here alone.
+                let mut starts = pad_ik_solutions(model, &q, pad_front, turn * orientation);
+                starts.truncate(3);
+                for start in starts {
+                    if carrying.at(model, &start) < LEAST_END_CLEARANCE {
+                        continue;
+                    }
+                    let Some(slide) = line(model, start, pad_front, pad_inside, turn * orientation)
+                    else {
+                        continue;
+                    };
+                    if slide
+                        .iter()
+                        .any(|c| carrying.at(model, c) < LEAST_END_CLEARANCE)
+                    {
+                        continue;
+                    }
+                    options.push((joint_distance(&q, &start), start, slide));
+                }
+            }
+        }
+        options.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (_, start, slide) in options.into_iter().take(3) {
+            if let Some(path) = self.plan_path(env, model, &carrying, q, start) {
+                return Some(vec![Leg::new(path), Leg::new(slide)]);
+            }
+        }
+        None
+    }
+
     /// The height (m) of the object's bottom where it is let go: just over bin 2's walls or
     /// the trash can's.
     fn drop_bottom(&self) -> f64 {
@@ -390,6 +482,16 @@ impl PlannedExpert {
         });
         let mut options: Vec<(f64, Joints, Grasp, Vec<Joints>)> = Vec::new();
         for grasp in candidates.into_iter().take(MAX_CANDIDATES) {
+            // The planned approach keeps clear of the object, so the straight stretch into a
+            // top grasp can be short.
+            let grasp = Grasp {
+                backoff: if grasp.top_down {
+                    grasp.backoff.min(TOP_BACKOFF)
+                } else {
+                    grasp.backoff
+                },
+                ..grasp
+            };
             let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
             solutions.truncate(4);
             for pre in solutions {
