@@ -37,6 +37,10 @@ const LINE_SPACING: f64 = 0.01;
 const PLAN_NODES: usize = 3000;
 /// The longest straight stretch (m) into a top grasp.
 const TOP_BACKOFF: f64 = 0.06;
+/// Leans (rad) of a top grasp's approach towards the robot, tried in turn.
+const GRASP_TILTS: [f64; 2] = [0.0, 0.45];
+/// What a leaning grasp counts as in joint travel (rad) when grasps are compared.
+const LEANING: f64 = 10.0;
 /// Grasp candidates tried per approach.
 const MAX_CANDIDATES: usize = 8;
 /// Top of bin 1's and bin 2's walls (m).
@@ -469,19 +473,27 @@ impl PlannedExpert {
             self.task.object,
             &Isometry3::from_parts(object.coords.into(), rotation),
         );
-        let candidates = grasp_candidates(&GraspInput {
-            model,
-            q,
-            object: self.task.object,
-            objective: self.task.objective,
-            obstacle: self.task.obstacle,
-            position: object,
-            rotation,
-            tilt: 0.0,
-            headings: Headings::TowardsBin2,
+        // Top grasps also leaning towards the robot: over a wall near it, a vertical gripper
+        // hangs the Panda's forearm on the wall.
+        let candidates = GRASP_TILTS.into_iter().flat_map(|tilt| {
+            grasp_candidates(&GraspInput {
+                model,
+                q,
+                object: self.task.object,
+                objective: self.task.objective,
+                obstacle: self.task.obstacle,
+                position: object,
+                rotation,
+                tilt,
+                headings: Headings::TowardsBin2,
+            })
+            .into_iter()
+            .filter(move |g| tilt == 0.0 || g.top_down)
+            .take(MAX_CANDIDATES)
+            .map(move |g| (tilt, g))
         });
         let mut options: Vec<(f64, Joints, Grasp, Vec<Joints>)> = Vec::new();
-        for grasp in candidates.into_iter().take(MAX_CANDIDATES) {
+        for (tilt, grasp) in candidates {
             // The planned approach keeps clear of the object, so the straight stretch into a
             // top grasp can be short.
             let grasp = Grasp {
@@ -510,7 +522,9 @@ impl PlannedExpert {
                 if arm_gap < 0.0 {
                     continue;
                 }
-                options.push((joint_distance(&q, &pre), pre, grasp, descent));
+                // A leaning grasp only where no upright one will do.
+                let cost = joint_distance(&q, &pre) + if tilt > 0.0 { LEANING } else { 0.0 };
+                options.push((cost, pre, grasp, descent));
             }
         }
         options.sort_by(|a, b| a.0.total_cmp(&b.0));
