@@ -19,7 +19,7 @@ use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 use super::EpisodeOutcome;
 use super::clearance::{Clearance, MIN_CLEARANCE};
 use super::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
-use super::motion::{pad_ik, pad_ik_solutions, pads_at};
+use super::motion::{pad_ik, pad_ik_clear, pad_ik_solutions, pads_at};
 use super::plan::{Space, plan};
 use super::track::{Joints, Leg, Tracker, joint_distance};
 use crate::TaskSpec;
@@ -59,10 +59,10 @@ const IN_BIN_Z: f64 = 0.87;
 const PUSH_LIFT: f64 = 0.012;
 /// The object must rise at least this far (m) with a push's lift for the grasp to count.
 const PUSH_RISE_CHECK: f64 = 0.006;
-/// The goal wall's line (y, m; on the seam between the bins) and a point past its free end
-/// (which is at x 0.11) that a pushed object goes round by (x, m).
+/// The goal wall's line (y, m; on the seam between the bins) and points past its free end
+/// (which is at x 0.11) that a pushed object may go round by (x, m), in the order tried.
 const GOAL_WALL_Y: f64 = -0.01;
-const AROUND_GOAL_WALL_X: f64 = 0.22;
+const AROUND_GOAL_WALL_X: [f64; 3] = [0.22, 0.17, 0.26];
 /// Lanes (x, m) across the shelf's opening (x −0.1…0.3) the object may go in along.
 const SHELF_LANES_X: [f64; 4] = [0.1, 0.17, 0.03, 0.24];
 /// Turns (rad) of the gripper about the vertical in front of the shelf, tried with each lane.
@@ -360,31 +360,64 @@ impl PlannedExpert {
 
     /// Push: the pads along straight lines that take the object, just off the floor, to the
     /// goal (round the goal wall's free end where the wall stands between them), the gripper
-    /// as it is. Not checked against the arena yet: past the goal wall the forearm runs into
-    /// the wall (a line of the pads cannot swing the elbow out of its way).
+    /// as it is, the elbow swung away from the arena where it comes close.
     fn plan_slide(&mut self, env: &Env, q: Joints, object: Point3<f64>) -> Option<Vec<Leg>> {
         let model = env.world().model;
+        let obs = env.observation();
+        let [x, y, z, w] = obs.object.orientation;
+        let object_pose = Isometry3::from_parts(
+            object.coords.into(),
+            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+        );
+        let carrying = self
+            .clearance
+            .holding(model, &q, self.task.object, &object_pose);
         let goal = env.goal();
-        let mut stops = Vec::new();
-        if self.task.obstacle == Obstacle::GoalWall
+        let round_the_wall = self.task.obstacle == Obstacle::GoalWall
             && goal.y > GOAL_WALL_Y
-            && object.y < GOAL_WALL_Y
-        {
-            stops.push(Vector3::new(AROUND_GOAL_WALL_X, GOAL_WALL_Y, object.z));
+            && object.y < GOAL_WALL_Y;
+        // Past the goal wall, lanes round its free end, the first the arm follows.
+        let lanes: &[f64] = if round_the_wall {
+            &AROUND_GOAL_WALL_X
+        } else {
+            &[f64::NAN]
+        };
+        let (start_pad, orientation) = pads_at(model, &q);
+        let offset = start_pad - object.coords;
+        // The first lane whose lines keep clear, else the one that comes least close (the
+        // model's spheres are rounder than the links: a few mm in is often no contact).
+        let mut best: Option<(f64, Vec<Leg>)> = None;
+        'lanes: for &lane in lanes {
+            let mut stops = Vec::new();
+            if !lane.is_nan() {
+                stops.push(Vector3::new(lane, GOAL_WALL_Y, object.z));
+            }
+            stops.push(Vector3::new(goal.x, goal.y, object.z));
+            let (mut pad, mut from) = (start_pad, q);
+            let mut legs = Vec::new();
+            let mut gap = f64::INFINITY;
+            for stop in stops {
+                let to = stop + offset;
+                let Some(points) = swinging_line(model, &carrying, from, pad, to, orientation)
+                else {
+                    continue 'lanes;
+                };
+                gap = points
+                    .iter()
+                    .map(|c| carrying.at(model, c))
+                    .fold(gap, f64::min);
+                from = *points.last().expect("a point");
+                pad = to;
+                legs.push(Leg::new(points));
+            }
+            if gap >= LEAST_END_CLEARANCE {
+                return Some(legs);
+            }
+            if best.as_ref().is_none_or(|(g, _)| gap > *g) {
+                best = Some((gap, legs));
+            }
         }
-        stops.push(Vector3::new(goal.x, goal.y, object.z));
-        let (mut pad, orientation) = pads_at(model, &q);
-        let offset = pad - object.coords;
-        let mut from = q;
-        let mut legs = Vec::new();
-        for stop in stops {
-            let to = stop + offset;
-            let points = line(model, from, pad, to, orientation)?;
-            from = *points.last().expect("a point");
-            pad = to;
-            legs.push(Leg::new(points));
-        }
-        Some(legs)
+        best.map(|(_, legs)| legs)
     }
 
     /// Shelf: a free path, the object carried, to in front of the shelf's opening with the
@@ -642,6 +675,31 @@ fn line(
     for k in 1..=n {
         let p = from + (to - from) * (k as f64 / n as f64);
         let (solved, met) = pad_ik(model, &last, p, orientation);
+        if !met {
+            return None;
+        }
+        points.push(solved);
+        last = solved;
+    }
+    Some(points)
+}
+
+/// [`line`], the arm swung away from the arena in the IK's null space wherever a link comes
+/// close to it (the elbow turning about the shoulder–wrist line, the pads held on the line).
+fn swinging_line(
+    model: &RobotModel,
+    clearance: &Clearance,
+    q: Joints,
+    from: Vector3<f64>,
+    to: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> Option<Vec<Joints>> {
+    let n = ((to - from).norm() / LINE_SPACING).ceil().max(1.0) as usize;
+    let mut points = vec![q];
+    let mut last = q;
+    for k in 1..=n {
+        let p = from + (to - from) * (k as f64 / n as f64);
+        let (solved, met) = pad_ik_clear(model, clearance, &last, p, orientation);
         if !met {
             return None;
         }
