@@ -54,6 +54,9 @@ const BIN2_FLOOR: f64 = 0.82;
 /// Where the object's origin is lowered to in bin 2 (m): 3 cm under the 0.9 m line below which
 /// it counts as in the bin.
 const IN_BIN_Z: f64 = 0.87;
+/// How far (m) the pads rise from a side grasp: a plate held by its rim first turns in the
+/// pads until its far edge leaves the floor.
+const SIDE_LIFT: f64 = 0.08;
 /// How far (m) the pads rise for a push: the object slides just off the floor, far under the
 /// 0.9 m line whose crossing ends a Push episode.
 const PUSH_LIFT: f64 = 0.012;
@@ -261,7 +264,12 @@ impl PlannedExpert {
                 let (pad, orientation) = pads_at(model, &q);
                 self.held = pad - object.coords;
                 self.lift_start_z = object.z;
-                let lift = if self.pushing() { PUSH_LIFT } else { LIFT };
+                let side = self.grasp.is_some_and(|g| !g.top_down);
+                let lift = match (self.pushing(), side) {
+                    (true, _) => PUSH_LIFT,
+                    (false, true) => SIDE_LIFT,
+                    (false, false) => LIFT,
+                };
                 let top = pad + Vector3::z() * lift;
                 match line(model, q, pad, top, orientation) {
                     Some(points) => self.start(Leg::new(points)),
