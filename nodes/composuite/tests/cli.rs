@@ -373,6 +373,27 @@ fn expert_writes_its_table_csv_and_heatmap() {
 }
 
 #[test]
+fn the_planned_expert_runs_from_the_command_line() {
+    let out_dir = std::env::temp_dir().join(format!("composuite-planned-{}", std::process::id()));
+    let value = json_of(&[
+        "expert",
+        "--planned",
+        "--tasks",
+        "Jaco/hollow_box/no_obstacle/shelf",
+        "--episodes",
+        "1",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(
+        value["tasks"][0]["success_rate"], 1.0,
+        "the planned expert solves this task on seed 0: {value}"
+    );
+    std::fs::remove_dir_all(out_dir).unwrap();
+}
+
+#[test]
 fn expert_refuses_an_empty_selection() {
     let out = composuite(&[
         "expert",

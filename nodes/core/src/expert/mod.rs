@@ -78,7 +78,7 @@ pub use planned::{PlannedExpert, Stage, run_planned_episode};
 pub use script::{Expert, Phase};
 
 use crate::TaskSpec;
-use crate::env::{Env, EnvConfig};
+use crate::env::{Action, Env, EnvConfig};
 
 /// What an episode of the expert achieved.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,6 +93,12 @@ pub struct EpisodeOutcome {
 
 /// Runs one episode of `task` with `seed` (default config) driven by the expert.
 pub fn run_episode(task: TaskSpec, seed: u64) -> EpisodeOutcome {
+    let mut expert = Expert::new(task);
+    run_with(task, seed, |env| expert.act(env))
+}
+
+/// Runs one episode of `task` with `seed` (default config), `act` choosing each action.
+fn run_with(task: TaskSpec, seed: u64, mut act: impl FnMut(&Env) -> Action) -> EpisodeOutcome {
     let mut env = Env::new(task, EnvConfig::default());
     let mut outcome = EpisodeOutcome {
         success: false,
@@ -102,9 +108,8 @@ pub fn run_episode(task: TaskSpec, seed: u64) -> EpisodeOutcome {
     if env.reset(seed).is_err() {
         return outcome;
     }
-    let mut expert = Expert::new(task);
     while env.ended().is_none() {
-        let action = expert.act(&env);
+        let action = act(&env);
         match env.step(&action) {
             Ok(step) => outcome.success |= step.info.success,
             Err(_) => break,

@@ -16,14 +16,14 @@ use std::f64::consts::FRAC_PI_2;
 
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 
-use super::EpisodeOutcome;
 use super::clearance::{Clearance, MIN_CLEARANCE};
 use super::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
 use super::motion::{pad_ik, pad_ik_clear, pad_ik_solutions, pads_at};
 use super::plan::{Space, plan};
 use super::track::{Joints, Leg, Tracker, joint_distance};
+use super::{EpisodeOutcome, run_with};
 use crate::TaskSpec;
-use crate::arena::{ROBOT_BASE_POSITION, TRASH_CAN, object_geometry};
+use crate::arena::{Primitive, ROBOT_BASE_POSITION, TRASH_CAN, arena_parts, object_geometry};
 use crate::axes::{Objective, Obstacle};
 use crate::env::{Action, Env};
 use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model};
@@ -43,14 +43,8 @@ const GRASP_TILTS: [f64; 2] = [0.0, 0.45];
 const LEANING: f64 = 10.0;
 /// Grasp candidates tried per approach.
 const MAX_CANDIDATES: usize = 8;
-/// Top of bin 1's and bin 2's walls (m).
-const BIN_WALL_TOP: f64 = 0.90;
-/// Top of the trash can's walls (m).
-const TRASH_CAN_TOP: f64 = 0.9855;
 /// How far (m) the object's bottom is above the walls of what it is dropped into.
 const DROP_CLEARANCE: f64 = 0.03;
-/// Top of bin 2's floor (m).
-const BIN2_FLOOR: f64 = 0.82;
 /// Where the object's origin is lowered to in bin 2 (m): 3 cm under the 0.9 m line below which
 /// it counts as in the bin.
 const IN_BIN_Z: f64 = 0.87;
@@ -221,10 +215,9 @@ impl PlannedExpert {
     /// Plan the next stage from what the environment shows now.
     fn advance(&mut self, env: &Env, q: Joints) {
         let model = env.world().model;
-        let obs = env.observation();
-        let object = Point3::from(obs.object.position);
-        let [x, y, z, w] = obs.object.orientation;
-        let rotation = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+        let pose = object_pose(env);
+        let object = Point3::from(pose.translation.vector);
+        let rotation = pose.rotation;
         let bottom = object_geometry(self.task.object).bottom_offset;
         match self.stage {
             Stage::Start => {
@@ -313,7 +306,8 @@ impl PlannedExpert {
                 // Success needs the object below bin 2's wall tops with the gripper near it:
                 // lowered there, not dropped.
                 let (pad, orientation) = pads_at(model, &q);
-                let floor_gap = object.z + bottom - (BIN2_FLOOR + 0.01);
+                let floor = top_of(Objective::PickPlace, "bin2/floor");
+                let floor_gap = object.z + bottom - (floor + 0.01);
                 let depth = (object.z - IN_BIN_Z).clamp(0.0, floor_gap.max(0.0));
                 match line(model, q, pad, pad - Vector3::z() * depth, orientation) {
                     Some(points) => self.start(Leg::new(points)),
@@ -361,6 +355,12 @@ impl PlannedExpert {
         self.hold(q);
     }
 
+    /// The arena's clearance model with the object, where it is now, carried by the hand.
+    fn carrying(&self, env: &Env, q: &Joints) -> Clearance {
+        self.clearance
+            .holding(env.world().model, q, self.task.object, &object_pose(env))
+    }
+
     /// Whether the objective is Push (the object slides just off the floor).
     fn pushing(&self) -> bool {
         self.task.objective == Objective::Push
@@ -371,15 +371,7 @@ impl PlannedExpert {
     /// as it is, the elbow swung away from the arena where it comes close.
     fn plan_slide(&mut self, env: &Env, q: Joints, object: Point3<f64>) -> Option<Vec<Leg>> {
         let model = env.world().model;
-        let obs = env.observation();
-        let [x, y, z, w] = obs.object.orientation;
-        let object_pose = Isometry3::from_parts(
-            object.coords.into(),
-            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
-        );
-        let carrying = self
-            .clearance
-            .holding(model, &q, self.task.object, &object_pose);
+        let carrying = self.carrying(env, &q);
         let goal = env.goal();
         let round_the_wall = self.task.obstacle == Obstacle::GoalWall
             && goal.y > GOAL_WALL_Y
@@ -435,15 +427,7 @@ impl PlannedExpert {
     /// arena, slide included.
     fn plan_shelf(&mut self, env: &Env, q: Joints) -> Option<Vec<Leg>> {
         let model = env.world().model;
-        let obs = env.observation();
-        let [x, y, z, w] = obs.object.orientation;
-        let object_pose = Isometry3::from_parts(
-            Vector3::from(obs.object.position).into(),
-            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
-        );
-        let carrying = self
-            .clearance
-            .holding(model, &q, self.task.object, &object_pose);
+        let carrying = self.carrying(env, &q);
         let (_, orientation) = pads_at(model, &q);
         let mut options: Vec<(f64, Joints, Vec<Joints>)> = Vec::new();
         for (lane, yaw, pitch) in SHELF_LANES_X.into_iter().flat_map(|lane| {
@@ -493,8 +477,8 @@ impl PlannedExpert {
     /// the trash can's.
     fn drop_bottom(&self) -> f64 {
         let top = match self.task.objective {
-            Objective::TrashCan => TRASH_CAN_TOP,
-            _ => BIN_WALL_TOP,
+            Objective::TrashCan => top_of(Objective::TrashCan, "trash_can/"),
+            _ => top_of(Objective::PickPlace, "bin2/wall"),
         };
         top + DROP_CLEARANCE
     }
@@ -582,15 +566,7 @@ impl PlannedExpert {
     /// vertical, the one moving the joints least.
     fn plan_carry(&mut self, env: &Env, q: Joints) -> Option<Vec<Joints>> {
         let model = env.world().model;
-        let obs = env.observation();
-        let [x, y, z, w] = obs.object.orientation;
-        let object_pose = Isometry3::from_parts(
-            Vector3::from(obs.object.position).into(),
-            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
-        );
-        let carrying = self
-            .clearance
-            .holding(model, &q, self.task.object, &object_pose);
+        let carrying = self.carrying(env, &q);
         let (pad, orientation) = pads_at(model, &q);
         let object_now = pad - self.held;
         let origin_z = self.drop_bottom() - object_geometry(self.task.object).bottom_offset;
@@ -650,6 +626,29 @@ impl PlannedExpert {
             .wrapping_add(self.requests);
         plan(&space, &from, &to, seed, PLAN_NODES)
     }
+}
+
+/// The object's pose as the observation reports it.
+fn object_pose(env: &Env) -> Isometry3<f64> {
+    let obs = env.observation();
+    let [x, y, z, w] = obs.object.orientation;
+    Isometry3::from_parts(
+        Vector3::from(obs.object.position).into(),
+        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+    )
+}
+
+/// The top (m) of the tallest of the arena's collision solids whose name starts with
+/// `prefix` (upright boxes: the bins' walls, the trash can's).
+fn top_of(objective: Objective, prefix: &str) -> f64 {
+    arena_parts(objective, Obstacle::NoObstacle)
+        .iter()
+        .filter(|p| p.collides && p.name.starts_with(prefix))
+        .map(|p| match p.shape {
+            Primitive::Box { half_extents } => p.pose.translation.z + half_extents.z,
+            Primitive::Cylinder { half_length, .. } => p.pose.translation.z + half_length,
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// The joint limits of the arm (±π for continuous joints).
@@ -719,24 +718,20 @@ fn swinging_line(
 
 /// Runs one episode of `task` with `seed` (default config) driven by the planned expert.
 pub fn run_planned_episode(task: TaskSpec, seed: u64) -> EpisodeOutcome {
-    let mut env = Env::new(task, crate::env::EnvConfig::default());
-    let mut outcome = EpisodeOutcome {
-        success: false,
-        ret: 0.0,
-        length: 0,
-    };
-    if env.reset(seed).is_err() {
-        return outcome;
-    }
     let mut expert = PlannedExpert::new(task);
-    while env.ended().is_none() {
-        let action = expert.act(&env);
-        match env.step(&action) {
-            Ok(step) => outcome.success |= step.info.success,
-            Err(_) => break,
-        }
+    run_with(task, seed, |env| expert.act(env))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The heights the expert drops and lowers to, read from the arena's table: bin 2's walls
+    /// and floor, the trash can's walls (docs/src/reference-facts.md §2).
+    #[test]
+    fn the_drop_heights_come_from_the_arena() {
+        assert!((top_of(Objective::PickPlace, "bin2/wall") - 0.90).abs() < 1e-9);
+        assert!((top_of(Objective::PickPlace, "bin2/floor") - 0.82).abs() < 1e-9);
+        assert!((top_of(Objective::TrashCan, "trash_can/") - 0.9855).abs() < 1e-9);
     }
-    outcome.ret = env.episode_return();
-    outcome.length = env.steps();
-    outcome
 }
