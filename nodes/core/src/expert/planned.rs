@@ -12,7 +12,6 @@
 //! let go and the next candidate tried.
 
 use std::collections::VecDeque;
-use std::f64::consts::FRAC_PI_2;
 
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 
@@ -42,7 +41,7 @@ const GRASP_TILTS: [f64; 2] = [0.0, 0.45];
 /// What a leaning grasp counts as in joint travel (rad) when grasps are compared.
 const LEANING: f64 = 10.0;
 /// Grasp candidates tried per approach.
-const MAX_CANDIDATES: usize = 8;
+const MAX_CANDIDATES: usize = 16;
 /// How far (m) the object's bottom is above the walls of what it is dropped into.
 const DROP_CLEARANCE: f64 = 0.03;
 /// Where the object's origin is lowered to in bin 2 (m): 3 cm under the 0.9 m line below which
@@ -72,10 +71,12 @@ const SHELF_PITCHES: [f64; 4] = [0.6, 0.4, 0.2, 0.0];
 /// where it is slid to (inside the 0.18…0.33 success band, short of the back panel at 0.32).
 const SHELF_FRONT_Y: f64 = 0.07;
 const SHELF_INSERT_Y: f64 = 0.25;
-/// The object's origin's height while it goes in (m): in the 0.945…1.095 success band, its
-/// bottom clear of the board (top 0.945) and the gripper's housing clear of the top block
-/// (bottom 1.10).
+/// The object's origin's height while it goes in (m): mid-way in the 0.945…1.095 success
+/// band, the gripper's housing clear of the top block (bottom 1.10)…
 const SHELF_INSERT_Z: f64 = 1.0;
+/// …or higher, so the object's bottom stays this far (m) above the board (top 0.945): the
+/// upright dumbbell reaches 5.2 cm below its origin.
+const SHELF_BOARD_CLEARANCE: f64 = 0.015;
 /// How far (m) the pads rise straight from the grasp before the carry: off the floor.
 const LIFT: f64 = 0.04;
 /// The object must rise at least this far (m) with the lift for the grasp to count.
@@ -421,14 +422,18 @@ impl PlannedExpert {
     }
 
     /// Shelf: a free path, the object carried, to in front of the shelf's opening with the
-    /// gripper turned from pointing down to pointing into the shelf (+y, a quarter turn about
-    /// x: a top grasp closes along x for this), then straight in. Of the lanes across the
+    /// gripper turned to point into the shelf (+y; from a top grasp, which closes along x for
+    /// this, a quarter turn about x), then straight in. Of the lanes across the
     /// opening and small turns about the vertical, the first the arm reaches clear of the
     /// arena, slide included.
     fn plan_shelf(&mut self, env: &Env, q: Joints) -> Option<Vec<Leg>> {
         let model = env.world().model;
         let carrying = self.carrying(env, &q);
         let (_, orientation) = pads_at(model, &q);
+        let insert_z = SHELF_INSERT_Z.max(
+            top_of(Objective::Shelf, "shelf/bottom") + SHELF_BOARD_CLEARANCE
+                - object_geometry(self.task.object).bottom_offset,
+        );
         let mut options: Vec<(f64, Joints, Vec<Joints>)> = Vec::new();
         for (lane, yaw, pitch) in SHELF_LANES_X.into_iter().flat_map(|lane| {
             SHELF_YAWS
@@ -436,12 +441,21 @@ impl PlannedExpert {
                 .flat_map(move |yaw| SHELF_PITCHES.map(|pitch| (lane, yaw, pitch)))
         }) {
             {
-                // From pointing down to pointing into the shelf, still `pitch` below level.
-                let into_shelf =
-                    UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2 - pitch);
-                let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * into_shelf;
-                let front = Vector3::new(lane, SHELF_FRONT_Y, SHELF_INSERT_Z);
-                let inside = Vector3::new(lane, SHELF_INSERT_Y, SHELF_INSERT_Z);
+                // The gripper turned the shortest way from where it points now to pointing
+                // into the shelf (+y turned by `yaw`), still `pitch` below level: for a top
+                // grasp a turn about x.
+                let into_shelf = Vector3::new(
+                    -yaw.sin() * pitch.cos(),
+                    yaw.cos() * pitch.cos(),
+                    -pitch.sin(),
+                );
+                let Some(turn) =
+                    UnitQuaternion::rotation_between(&(orientation * Vector3::z()), &into_shelf)
+                else {
+                    continue;
+                };
+                let front = Vector3::new(lane, SHELF_FRONT_Y, insert_z);
+                let inside = Vector3::new(lane, SHELF_INSERT_Y, insert_z);
                 let (pad_front, pad_inside) = (front + turn * self.held, inside + turn * self.held);
                 // A quarter turn of the wrist is too far for the IK seeded here alone.
                 let mut starts = pad_ik_solutions(model, &q, pad_front, turn * orientation);
@@ -733,5 +747,6 @@ mod tests {
         assert!((top_of(Objective::PickPlace, "bin2/wall") - 0.90).abs() < 1e-9);
         assert!((top_of(Objective::PickPlace, "bin2/floor") - 0.82).abs() < 1e-9);
         assert!((top_of(Objective::TrashCan, "trash_can/") - 0.9855).abs() < 1e-9);
+        assert!((top_of(Objective::Shelf, "shelf/bottom") - 0.945).abs() < 1e-9);
     }
 }
