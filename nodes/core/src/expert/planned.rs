@@ -53,6 +53,11 @@ const SIDE_LIFT: f64 = 0.08;
 /// How far (m) the pads rise for a push: the object slides just off the floor, far under the
 /// 0.9 m line whose crossing ends a Push episode.
 const PUSH_LIFT: f64 = 0.012;
+/// The most (m) the pads rise from a side grasp for a push…
+const SIDE_PUSH_LIFT: f64 = 0.04;
+/// …keeping the object's origin under this height (m; a Push episode ends above 0.9): the
+/// dumbbell (origin 0.868 at rest) rises 1.2 cm.
+const PUSH_SIDE_TOP: f64 = 0.88;
 /// The object must rise at least this far (m) with a push's lift for the grasp to count.
 const PUSH_RISE_CHECK: f64 = 0.006;
 /// The goal wall's line (y, m; on the seam between the bins) and points past its free end
@@ -260,7 +265,10 @@ impl PlannedExpert {
                 self.lift_start_z = object.z;
                 let side = self.grasp.is_some_and(|g| !g.top_down);
                 let lift = match (self.pushing(), side) {
-                    (true, _) => PUSH_LIFT,
+                    // Up to just under the line that ends a Push episode: a plate held by its
+                    // rim turns in the pads before it leaves the floor.
+                    (true, true) => (PUSH_SIDE_TOP - object.z).clamp(PUSH_LIFT, SIDE_PUSH_LIFT),
+                    (true, false) => PUSH_LIFT,
                     (false, true) => SIDE_LIFT,
                     (false, false) => LIFT,
                 };
