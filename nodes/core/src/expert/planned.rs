@@ -330,9 +330,16 @@ impl PlannedExpert {
             }
             Stage::Release => {
                 let (pad, orientation) = pads_at(model, &q);
-                // Out of the shelf backwards (its top block is above), else straight up.
+                // Out of the shelf backwards (its top block is above); from a side grasp back
+                // along the gripper, level (open fingers rising at once carry the dumbbell's
+                // upper disc with them); else straight up.
+                let pointing = orientation * Vector3::z();
+                let level = Vector3::new(pointing.x, pointing.y, 0.0);
+                let side = self.grasp.is_some_and(|g| !g.top_down);
                 let away = if self.task.objective == Objective::Shelf && self.grasp.is_some() {
                     -Vector3::y()
+                } else if side && level.norm() > 0.3 {
+                    -level.normalize()
                 } else {
                     Vector3::z()
                 };
