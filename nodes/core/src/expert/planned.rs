@@ -33,7 +33,7 @@ const GRIP_STEPS: u32 = 10;
 /// Spacing (m) of the IK points along a straight line of the pads.
 const LINE_SPACING: f64 = 0.01;
 /// Tree nodes a planning request may grow before it gives up.
-const PLAN_NODES: usize = 3000;
+const PLAN_NODES: usize = 10000;
 /// The longest straight stretch (m) into a top grasp.
 const TOP_BACKOFF: f64 = 0.06;
 /// Leans (rad) of a top grasp's approach towards the robot, tried in turn.
