@@ -58,7 +58,7 @@ pub struct ExpertArgs {
     /// with the reference's 8 numbers, on motions planned in joint space.
     #[arg(long)]
     planned: bool,
-    /// Print JSON: {"mean_success", "tasks": [{"task", "success_rate", "mean_return", "mean_length"}, ...]}.
+    /// Print JSON: {"mean_success", "expert_seconds_median", "expert_seconds_max", "tasks": [{"task", "success_rate", "mean_return", "mean_length"}, ...]}.
     #[arg(long)]
     json: bool,
 }
@@ -174,7 +174,11 @@ pub fn run(args: &ExpertArgs) -> Result<(), String> {
     std::fs::write(args.out.join("summary.txt"), &summary).map_err(|e| e.to_string())?;
     crate::plots::success_heatmap(
         &args.out.join("success.png"),
-        "Scripted expert: success rate per task",
+        if args.planned {
+            "Planned expert: success rate per task"
+        } else {
+            "Scripted expert: success rate per task"
+        },
         &|task| {
             results
                 .iter()
@@ -190,7 +194,12 @@ pub fn run(args: &ExpertArgs) -> Result<(), String> {
                        "mean_return": r.mean_return(), "mean_length": r.mean_length()})
             })
             .collect();
-        println!("{}", json!({"mean_success": mean_success, "tasks": rows}));
+        let (median, max) = expert_seconds(&results);
+        println!(
+            "{}",
+            json!({"mean_success": mean_success, "expert_seconds_median": median,
+                   "expert_seconds_max": max, "tasks": rows})
+        );
     } else {
         print!("{summary}");
         println!(
@@ -221,6 +230,17 @@ fn write_csv(out: &std::path::Path, results: &[TaskResult]) -> Result<(), String
         ));
     }
     std::fs::write(out.join("results.csv"), text).map_err(|e| e.to_string())
+}
+
+/// The median and the largest time (s) the expert spent choosing an episode's actions.
+fn expert_seconds(results: &[TaskResult]) -> (f64, f64) {
+    let mut times: Vec<f64> = results
+        .iter()
+        .flat_map(|r| r.outcomes.iter().map(|o| o.expert_seconds))
+        .collect();
+    times.sort_by(f64::total_cmp);
+    let median = times.get(times.len() / 2).copied().unwrap_or(0.0);
+    (median, times.last().copied().unwrap_or(0.0))
 }
 
 fn summary_text(results: &[TaskResult], mean_success: f64, episodes: u64) -> String {
@@ -263,6 +283,12 @@ fn summary_text(results: &[TaskResult], mean_success: f64, episodes: u64) -> Str
     axis("object", &|t| t.object.wire_name());
     axis("obstacle", &|t| t.obstacle.wire_name());
     axis("objective", &|t| t.objective.wire_name());
+    let (median, max) = expert_seconds(results);
+    s.push_str(&format!(
+        "expert time per episode (choosing actions, planning included): median {:.0} ms, max {:.0} ms\n",
+        1e3 * median,
+        1e3 * max
+    ));
     let weak: Vec<String> = results
         .iter()
         .filter(|r| r.success_rate() < 0.5)

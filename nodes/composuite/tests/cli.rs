@@ -390,6 +390,16 @@ fn the_planned_expert_runs_from_the_command_line() {
         value["tasks"][0]["success_rate"], 1.0,
         "the planned expert solves this task on seed 0: {value}"
     );
+    let (median, max) = (
+        value["expert_seconds_median"].as_f64().unwrap(),
+        value["expert_seconds_max"].as_f64().unwrap(),
+    );
+    assert!(median > 0.0 && median <= max, "{value}");
+    let summary = std::fs::read_to_string(out_dir.join("summary.txt")).unwrap();
+    assert!(
+        summary.contains("expert time per episode (choosing actions, planning included): median"),
+        "{summary}"
+    );
     std::fs::remove_dir_all(out_dir).unwrap();
 }
 

@@ -89,6 +89,9 @@ pub struct EpisodeOutcome {
     pub ret: f64,
     /// Control steps run.
     pub length: u32,
+    /// Wall-clock seconds the expert spent choosing its actions (planning included): a
+    /// measurement, not part of the episode (the trajectory does not depend on it).
+    pub expert_seconds: f64,
 }
 
 /// Runs one episode of `task` with `seed` (default config) driven by the expert.
@@ -104,12 +107,15 @@ fn run_with(task: TaskSpec, seed: u64, mut act: impl FnMut(&Env) -> Action) -> E
         success: false,
         ret: 0.0,
         length: 0,
+        expert_seconds: 0.0,
     };
     if env.reset(seed).is_err() {
         return outcome;
     }
     while env.ended().is_none() {
+        let started = std::time::Instant::now();
         let action = act(&env);
+        outcome.expert_seconds += started.elapsed().as_secs_f64();
         match env.step(&action) {
             Ok(step) => outcome.success |= step.info.success,
             Err(_) => break,
