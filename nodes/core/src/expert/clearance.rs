@@ -127,19 +127,25 @@ impl Clearance {
 
     /// The smallest gap (m) between the arm at `q` (fingers open) and the arena.
     pub fn at(&self, model: &RobotModel, q: &[f64; ARM_DOF]) -> f64 {
-        let poses = body_poses(model, q, [0.0, 0.0]);
-        self.spheres
-            .iter()
-            .map(|s| self.sphere_gap(&poses, s))
-            .fold(f64::INFINITY, f64::min)
+        self.smallest_gap(model, q, |_| true)
     }
 
     /// The smallest gap (m) between the arm at `q` and the arena, the fingers left out.
     pub fn without_fingers(&self, model: &RobotModel, q: &[f64; ARM_DOF]) -> f64 {
+        self.smallest_gap(model, q, |s| !s.finger)
+    }
+
+    /// The smallest gap (m) between the arena and the spheres `counts` keeps, the arm at `q`.
+    fn smallest_gap(
+        &self,
+        model: &RobotModel,
+        q: &[f64; ARM_DOF],
+        counts: impl Fn(&Sphere) -> bool,
+    ) -> f64 {
         let poses = body_poses(model, q, [0.0, 0.0]);
         self.spheres
             .iter()
-            .filter(|s| !s.finger)
+            .filter(|s| counts(s))
             .map(|s| self.sphere_gap(&poses, s))
             .fold(f64::INFINITY, f64::min)
     }

@@ -1,13 +1,12 @@
 //! The expert as an agent acts (work in progress, issue 49): every action is the reference's
 //! 8 numbers, the arm's motions are planned in joint space (`plan.rs`) and followed through
 //! the reference's controller (`track.rs`), and the gripper is driven by the sign of a[7]
-//! alone. So far it does the objectives that carry the object and let it go (pick_place,
-//! trash_can); [`crate::expert::Expert`] stays the default until it does them all.
+//! alone. [`crate::expert::Expert`] stays the default until it solves every task.
 //!
 //! Stages: approach (planned, to a pre-grasp the arm reaches with the least joint travel) →
-//! descend (a straight line of the pads into the grasp) → close → lift (straight up, until
-//! the object's bottom clears what lies between it and the goal) → carry (planned, to above
-//! the goal, the gripper turned about the vertical by whatever turn moves the joints least) →
+//! descend (a straight line of the pads into the grasp) → close → lift (a few cm straight up)
+//! → the objective's carry (pick_place and trash_can: planned, to above the goal; push:
+//! straight lines just off the floor; shelf: planned, to in front of it, then slid in) →
 //! lower (pick_place) → release → retreat → hold. A grasp that did not lift the object is
 //! let go and the next candidate tried.
 
@@ -86,7 +85,7 @@ const SHELF_BOARD_CLEARANCE: f64 = 0.015;
 const LIFT: f64 = 0.04;
 /// The object must rise at least this far (m) with the lift for the grasp to count.
 const RISE_CHECK: f64 = 0.025;
-/// How far (m) the pads rise after letting go.
+/// How far (m) the pads move away after letting go.
 const RETREAT: f64 = 0.08;
 /// The least clearance (m) a pre-grasp or the carry's end may keep from the arena: the
 /// fingers of a side grasp come within millimetres of the floor, and the model's spheres
@@ -117,7 +116,7 @@ pub enum Stage {
     Lower,
     /// Opening the fingers.
     Release,
-    /// Up and away from the object.
+    /// Away from the object (up, back out of a side grasp or the shelf).
     Retreat,
     /// Holding still until the episode ends.
     Done,
@@ -234,12 +233,11 @@ impl PlannedExpert {
                 }
                 self.attempts += 1;
                 match self.plan_approach(env, q, object, rotation) {
-                    Some((mut legs, grasp, descent)) => {
+                    Some((path, grasp, descent)) => {
                         self.gripper_goal = gripper_level(grasp.open);
                         self.grasp = Some(grasp);
                         self.descent = descent;
-                        self.start(legs.remove(0));
-                        self.queue.extend(legs);
+                        self.start(Leg::new(path));
                         self.stage = Stage::Approach;
                     }
                     None => {
@@ -392,21 +390,21 @@ impl PlannedExpert {
         let round_the_wall = self.task.obstacle == Obstacle::GoalWall
             && goal.y > GOAL_WALL_Y
             && object.y < GOAL_WALL_Y;
-        // Past the goal wall, lanes round its free end, the first the arm follows.
-        let lanes: &[f64] = if round_the_wall {
-            &AROUND_GOAL_WALL_X
+        // Past the goal wall, by one of the lanes round its free end; else straight there.
+        let lanes: Vec<Option<f64>> = if round_the_wall {
+            AROUND_GOAL_WALL_X.into_iter().map(Some).collect()
         } else {
-            &[f64::NAN]
+            vec![None]
         };
         let (start_pad, orientation) = pads_at(model, &q);
         let offset = start_pad - object.coords;
         // The first lane whose lines keep clear, else the one that comes least close (the
         // model's spheres are rounder than the links: a few mm in is often no contact).
         let mut best: Option<(f64, Vec<Leg>)> = None;
-        'lanes: for &lane in lanes {
+        'lanes: for lane in lanes {
             let mut stops = Vec::new();
-            if !lane.is_nan() {
-                stops.push(Vector3::new(lane, GOAL_WALL_Y, object.z));
+            if let Some(x) = lane {
+                stops.push(Vector3::new(x, GOAL_WALL_Y, object.z));
             }
             stops.push(Vector3::new(goal.x, goal.y, object.z));
             let (mut pad, mut from) = (start_pad, q);
@@ -455,42 +453,40 @@ impl PlannedExpert {
                 .into_iter()
                 .flat_map(move |yaw| SHELF_PITCHES.map(|pitch| (lane, yaw, pitch)))
         }) {
-            {
-                // The gripper turned the shortest way from where it points now to pointing
-                // into the shelf (+y turned by `yaw`), still `pitch` below level: for a top
-                // grasp a turn about x.
-                let into_shelf = Vector3::new(
-                    -yaw.sin() * pitch.cos(),
-                    yaw.cos() * pitch.cos(),
-                    -pitch.sin(),
-                );
-                let Some(turn) =
-                    UnitQuaternion::rotation_between(&(orientation * Vector3::z()), &into_shelf)
+            // The gripper turned the shortest way from where it points now to pointing
+            // into the shelf (+y turned by `yaw`), still `pitch` below level: for a top
+            // grasp a turn about x.
+            let into_shelf = Vector3::new(
+                -yaw.sin() * pitch.cos(),
+                yaw.cos() * pitch.cos(),
+                -pitch.sin(),
+            );
+            let Some(turn) =
+                UnitQuaternion::rotation_between(&(orientation * Vector3::z()), &into_shelf)
+            else {
+                continue;
+            };
+            let front = Vector3::new(lane, SHELF_FRONT_Y, insert_z);
+            let inside = Vector3::new(lane, SHELF_INSERT_Y, insert_z);
+            let (pad_front, pad_inside) = (front + turn * self.held, inside + turn * self.held);
+            // A quarter turn of the wrist is too far for the IK seeded here alone.
+            let mut starts = pad_ik_solutions(model, &q, pad_front, turn * orientation);
+            starts.truncate(3);
+            for start in starts {
+                if carrying.at(model, &start) < LEAST_END_CLEARANCE {
+                    continue;
+                }
+                let Some(slide) = line(model, start, pad_front, pad_inside, turn * orientation)
                 else {
                     continue;
                 };
-                let front = Vector3::new(lane, SHELF_FRONT_Y, insert_z);
-                let inside = Vector3::new(lane, SHELF_INSERT_Y, insert_z);
-                let (pad_front, pad_inside) = (front + turn * self.held, inside + turn * self.held);
-                // A quarter turn of the wrist is too far for the IK seeded here alone.
-                let mut starts = pad_ik_solutions(model, &q, pad_front, turn * orientation);
-                starts.truncate(3);
-                for start in starts {
-                    if carrying.at(model, &start) < LEAST_END_CLEARANCE {
-                        continue;
-                    }
-                    let Some(slide) = line(model, start, pad_front, pad_inside, turn * orientation)
-                    else {
-                        continue;
-                    };
-                    if slide
-                        .iter()
-                        .any(|c| carrying.at(model, c) < LEAST_END_CLEARANCE)
-                    {
-                        continue;
-                    }
-                    options.push((joint_distance(&q, &start), start, slide));
+                if slide
+                    .iter()
+                    .any(|c| carrying.at(model, c) < LEAST_END_CLEARANCE)
+                {
+                    continue;
                 }
+                options.push((joint_distance(&q, &start), start, slide));
             }
         }
         options.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -512,16 +508,16 @@ impl PlannedExpert {
         top + DROP_CLEARANCE
     }
 
-    /// The legs to a pre-grasp (a free path; for a side grasp to above it, then straight
-    /// down), the grasp, and the straight descent into it: of the candidates the arm reaches
-    /// clear of the arena and the object, the one with the least joint travel.
+    /// A free path to a pre-grasp, the grasp, and the straight descent into it: of the
+    /// candidates the arm reaches clear of the arena and the object, the one with the least
+    /// joint travel.
     fn plan_approach(
         &mut self,
         env: &Env,
         q: Joints,
         object: Point3<f64>,
         rotation: UnitQuaternion<f64>,
-    ) -> Option<(Vec<Leg>, Grasp, Vec<Joints>)> {
+    ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
         let model = env.world().model;
         let around = self.clearance.with_object(
             self.task.object,
@@ -584,7 +580,7 @@ impl PlannedExpert {
         options.sort_by(|a, b| a.0.total_cmp(&b.0));
         for (_, pre, grasp, descent) in options {
             if let Some(path) = self.plan_path(env, model, &around, q, pre) {
-                return Some((vec![Leg::new(path)], grasp, descent));
+                return Some((path, grasp, descent));
             }
         }
         None
@@ -705,19 +701,7 @@ fn line(
     to: Vector3<f64>,
     orientation: UnitQuaternion<f64>,
 ) -> Option<Vec<Joints>> {
-    let n = ((to - from).norm() / LINE_SPACING).ceil().max(1.0) as usize;
-    let mut points = vec![q];
-    let mut last = q;
-    for k in 1..=n {
-        let p = from + (to - from) * (k as f64 / n as f64);
-        let (solved, met) = pad_ik(model, &last, p, orientation);
-        if !met {
-            return None;
-        }
-        points.push(solved);
-        last = solved;
-    }
-    Some(points)
+    line_by(q, from, to, |last, p| pad_ik(model, last, p, orientation))
 }
 
 /// [`line`], the arm swung away from the arena in the IK's null space wherever a link comes
@@ -730,17 +714,29 @@ fn swinging_line(
     to: Vector3<f64>,
     orientation: UnitQuaternion<f64>,
 ) -> Option<Vec<Joints>> {
+    line_by(q, from, to, |last, p| {
+        pad_ik_clear(model, clearance, last, p, orientation)
+    })
+}
+
+/// Points every [`LINE_SPACING`] from `from` to `to`, each turned into joints by `solve` from
+/// the joints of the one before (`q` first): the joints, `q` included, or `None` where
+/// `solve` does not meet a point.
+fn line_by(
+    q: Joints,
+    from: Vector3<f64>,
+    to: Vector3<f64>,
+    mut solve: impl FnMut(&Joints, Vector3<f64>) -> (Joints, bool),
+) -> Option<Vec<Joints>> {
     let n = ((to - from).norm() / LINE_SPACING).ceil().max(1.0) as usize;
     let mut points = vec![q];
-    let mut last = q;
     for k in 1..=n {
         let p = from + (to - from) * (k as f64 / n as f64);
-        let (solved, met) = pad_ik_clear(model, clearance, &last, p, orientation);
+        let (solved, met) = solve(points.last().expect("q first"), p);
         if !met {
             return None;
         }
         points.push(solved);
-        last = solved;
     }
     Some(points)
 }

@@ -110,11 +110,6 @@ pub(crate) struct Leg {
 impl Leg {
     /// A leg through `points` (at least one) at the top pace.
     pub fn new(points: Vec<Joints>) -> Leg {
-        Leg::with_pace(points, MAX_SPEED, MAX_ACCELERATION)
-    }
-
-    /// A leg through `points` at up to `speed` (rad/s) and `acceleration` (rad/s²).
-    pub fn with_pace(points: Vec<Joints>, speed: f64, acceleration: f64) -> Leg {
         assert!(!points.is_empty(), "a leg needs a point");
         let mut at_point = vec![0.0];
         for pair in points.windows(2) {
@@ -124,8 +119,8 @@ impl Leg {
         Leg {
             points,
             at_point,
-            speed,
-            acceleration,
+            speed: MAX_SPEED,
+            acceleration: MAX_ACCELERATION,
         }
     }
 
@@ -184,14 +179,14 @@ impl Leg {
 
     /// The path's joints and joint speeds (rad/s) at time `t` (s).
     pub fn at(&self, t: f64) -> (Joints, Joints) {
+        if self.points.len() == 1 {
+            return (self.points[0], [0.0; ARM_DOF]);
+        }
         let (s, speed) = self.progress(t);
         let i = self
             .at_point
             .partition_point(|&a| a <= s)
-            .clamp(1, self.points.len().max(2) - 1);
-        if self.points.len() == 1 {
-            return (self.points[0], [0.0; ARM_DOF]);
-        }
+            .clamp(1, self.points.len() - 1);
         let (a, b) = (&self.points[i - 1], &self.points[i]);
         let span = self.at_point[i] - self.at_point[i - 1];
         if span <= 0.0 {
@@ -253,10 +248,15 @@ impl Tracker {
         self.steps
     }
 
+    /// Control steps the leg's time law takes.
+    fn planned_steps(&self) -> u32 {
+        (self.leg.duration() / self.response.period).ceil() as u32
+    }
+
     /// Whether the leg is over: its time has run and the arm has arrived (or has had
     /// [`SETTLE_STEPS`] to, or has stalled short of it).
     pub fn arrived(&self, q: &Joints, v: &Joints) -> bool {
-        let planned = (self.leg.duration() / self.response.period).ceil() as u32;
+        let planned = self.planned_steps();
         if self.steps < planned {
             return false;
         }
@@ -279,8 +279,7 @@ impl Tracker {
                 *d = d.clamp(-r.delta * limit, r.delta * limit);
             }
         }
-        let planned = (self.leg.duration() / r.period).ceil() as u32;
-        if self.steps >= planned && v.iter().all(|s| s.abs() < STALL_SPEED) {
+        if self.steps >= self.planned_steps() && v.iter().all(|s| s.abs() < STALL_SPEED) {
             self.stalled += 1;
         } else {
             self.stalled = 0;

@@ -25,5 +25,5 @@ pub(crate) use urdf::urdf_pose;
 pub(crate) use world::REFERENCE_KP;
 pub use world::{
     ArmHandles, FINGER_OPEN, FingerContacts, GripperCommand, ServoMode, SimWorld, finger_for_gap,
-    from_pose, pad_gap, reference_command_for_gap, reference_finger_aim, to_pose,
+    from_pose, pad_gap, reference_command_for_gap, to_pose,
 };

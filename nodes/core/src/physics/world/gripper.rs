@@ -45,7 +45,7 @@ pub const FINGER_OPEN: f64 = 0.020833;
 const REFERENCE_FINGER_AIMS: (f64, f64) = (-0.020833, 0.0115);
 
 /// Where the reference's gripper command `c` (in [−1, 1]) aims the left finger (m).
-pub fn reference_finger_aim(c: f64) -> f64 {
+fn reference_finger_aim(c: f64) -> f64 {
     let (closed, open) = REFERENCE_FINGER_AIMS;
     open + (c + 1.0) / 2.0 * (closed - open)
 }
@@ -96,13 +96,8 @@ impl SimWorld {
                     0.0
                 };
                 self.gripper_c = (self.gripper_c + step).clamp(-1.0, 1.0);
-                (
-                    [
-                        reference_finger_aim(self.gripper_c),
-                        -reference_finger_aim(self.gripper_c),
-                    ],
-                    self.gripper.max_force,
-                )
+                let q = reference_finger_aim(self.gripper_c);
+                ([q, -q], self.gripper.max_force)
             }
         }
     }

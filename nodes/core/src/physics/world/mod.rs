@@ -22,7 +22,6 @@ pub use contacts::FingerContacts;
 pub use convert::{from_pose, to_pose};
 pub use gripper::{
     FINGER_OPEN, GripperCommand, finger_for_gap, pad_gap, reference_command_for_gap,
-    reference_finger_aim,
 };
 pub(crate) use servos::REFERENCE_KP;
 pub use servos::ServoMode;
