@@ -51,7 +51,7 @@ fn reference_finger_aim(c: f64) -> f64 {
 }
 
 /// The reference gripper command that aims the pads at a gap of `gap` (m); the inverse of
-/// [`reference_finger_aim`] and [`pad_gap`], not clamped.
+/// where the reference aims the finger for a command, and of [`pad_gap`]; not clamped.
 pub fn reference_command_for_gap(gap: f64) -> f64 {
     let (closed, open) = REFERENCE_FINGER_AIMS;
     2.0 * (finger_for_gap(gap) - open) / (closed - open) - 1.0
