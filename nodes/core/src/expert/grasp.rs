@@ -137,7 +137,14 @@ pub(super) enum Headings {
     /// object on to the goal keeps the wrist off the wall. The carry's clearance decides
     /// among them.
     Regrasp,
+    /// Every [`AROUND_HEADINGS`]th of a turn from +x, those of [`Headings::TowardsBin2`]
+    /// left out: the planned expert's second choice where none of those has a free path
+    /// (behind the object wall the gripper may point back past the wall's end).
+    Around,
 }
+
+/// The headings [`Headings::Around`] tries (every 15°).
+const AROUND_HEADINGS: usize = 24;
 
 impl Headings {
     /// The horizontal directions a side grasp may point in, best first.
@@ -150,6 +157,16 @@ impl Headings {
                 Vector3::x(),
                 Vector3::new(d, -d, 0.0),
             ],
+            Headings::Around => {
+                let first = Headings::TowardsBin2.directions();
+                (0..AROUND_HEADINGS)
+                    .map(|k| {
+                        let a = k as f64 * std::f64::consts::TAU / AROUND_HEADINGS as f64;
+                        Vector3::new(a.cos(), a.sin(), 0.0)
+                    })
+                    .filter(|h| first.iter().all(|f| (f - h).norm() > 1e-6))
+                    .collect()
+            }
             Headings::Regrasp => vec![
                 Vector3::new(d, -d, 0.0),
                 -Vector3::y(),
@@ -404,5 +421,19 @@ mod tests {
         // The pads' 3.3 cm span around the raised centre stays inside the box's 6 cm height.
         let half_height = -object_geometry(Object::Box).bottom_offset;
         assert!(BOX_RAISED_GRASP + 0.033 / 2.0 <= half_height);
+    }
+
+    /// The second choice of headings goes all round, every 15°, without the first choice's.
+    #[test]
+    fn the_headings_all_round_leave_out_the_first_choice() {
+        let first = Headings::TowardsBin2.directions();
+        let around = Headings::Around.directions();
+        assert_eq!(around.len(), AROUND_HEADINGS - first.len());
+        for h in &around {
+            assert!((h.norm() - 1.0).abs() < 1e-12 && h.z == 0.0);
+            assert!(first.iter().all(|f| (f - h).norm() > 1e-6), "{h:?}");
+            let degrees = h.y.atan2(h.x).to_degrees();
+            assert!((degrees / 15.0 - (degrees / 15.0).round()).abs() < 1e-9);
+        }
     }
 }

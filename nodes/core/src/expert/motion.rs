@@ -211,3 +211,123 @@ pub(super) fn pads_at(
     let pad = grip * Point3::new(0.0, 0.0, -PAD_CENTRE_ABOVE_GRIP_SITE);
     (pad.coords, grip.rotation)
 }
+
+/// Steps of [`least_travel`]'s descent.
+const LEAST_TRAVEL_STEPS: usize = 40;
+/// The largest joint change (rad) of one such step at first.
+const LEAST_TRAVEL_STEP: f64 = 0.05;
+
+/// `solved` (joints meeting the pads' pose) slid along the arm's self-motion (the elbow's swing
+/// about the shoulder–wrist line, the pads held) towards the pose nearest `q` in the largest
+/// joint difference: under the reference's controller that is the time the move takes.
+pub(super) fn least_travel(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+    solved: [f64; ARM_DOF],
+    pad: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> [f64; ARM_DOF] {
+    let travel = |c: &[f64; ARM_DOF]| {
+        (0..ARM_DOF)
+            .map(|j| (c[j] - q[j]).abs())
+            .fold(0.0, f64::max)
+    };
+    let (mut best, mut best_travel) = (solved, travel(&solved));
+    let mut step = LEAST_TRAVEL_STEP;
+    for _ in 0..LEAST_TRAVEL_STEPS {
+        if best_travel < 1e-6 || step < 1e-3 {
+            break;
+        }
+        // Downhill of Σ (d_j / max)^8: the joints that move furthest pulled back hardest.
+        let downhill = SVector::<f64, ARM_DOF>::from_fn(|j, _| {
+            let d = best[j] - q[j];
+            -d.signum() * (d.abs() / best_travel).powi(7)
+        });
+        let Some(swing) = null_space_motion(model, GRIP_SITE_LINK, &best, &downhill) else {
+            break;
+        };
+        let largest = swing.amax();
+        if largest < 1e-9 {
+            break;
+        }
+        let mut moved = best;
+        for j in 0..ARM_DOF {
+            moved[j] += step / largest * swing[j];
+        }
+        let (moved, met) = pad_ik(model, &moved, pad, orientation);
+        let moved_travel = travel(&moved);
+        if met && moved_travel < best_travel - 1e-6 {
+            (best, best_travel) = (moved, moved_travel);
+        } else {
+            step *= 0.5;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::axes::Robot;
+    use crate::physics::robot_model;
+
+    /// Sliding a solution along the arm's self-motion keeps the pads where they were and
+    /// finds the quicker poses: for every arm, the pose the shoulder, elbow and wrist bent
+    /// from the initial pose put the pads in, its elbow first swung away (1.2 rad of joint motion), comes
+    /// back to about the bend's own largest joint move.
+    #[test]
+    fn least_travel_keeps_the_pose_and_moves_the_joints_less() {
+        for robot in [Robot::Iiwa, Robot::Jaco, Robot::Gen3, Robot::Panda] {
+            let model = robot_model(robot);
+            let q = robot.init_qpos();
+            let mut bent = q;
+            for (j, by) in [(1, 0.3), (3, 0.5), (5, -0.8)] {
+                bent[j] += by;
+            }
+            let (pad, orientation) = pads_at(model, &bent);
+            let travel = |c: &[f64; ARM_DOF]| {
+                (0..ARM_DOF)
+                    .map(|j| (c[j] - q[j]).abs())
+                    .fold(0.0, f64::max)
+            };
+            // The elbow swung by turning the shoulder (the way that moves the joints more), the
+            // pads held.
+            let swing_by = |sign: f64| {
+                let shoulder =
+                    SVector::<f64, ARM_DOF>::from_fn(|j, _| if j == 0 { sign } else { 0.0 });
+                let mut swung = bent;
+                for _ in 0..20 {
+                    let swing = null_space_motion(model, GRIP_SITE_LINK, &swung, &shoulder)
+                        .expect("grip site");
+                    let step = 0.06 / swing.amax();
+                    let moved = std::array::from_fn(|j| swung[j] + step * swing[j]);
+                    let (moved, met) = pad_ik(model, &moved, pad, orientation);
+                    assert!(met, "{robot:?}");
+                    swung = moved;
+                }
+                swung
+            };
+            let (plus, minus) = (swing_by(1.0), swing_by(-1.0));
+            let swung = if travel(&plus) > travel(&minus) {
+                plus
+            } else {
+                minus
+            };
+            assert!(travel(&swung) > travel(&bent) + 0.1, "{robot:?}");
+            let quicker = least_travel(model, &q, swung, pad, orientation);
+            let (at, turned) = pads_at(model, &quicker);
+            assert!((at - pad).norm() < IK_MET_POSITION, "{robot:?}");
+            assert!(
+                turned.angle_to(&orientation) < IK_MET_ORIENTATION,
+                "{robot:?}"
+            );
+            assert!(
+                travel(&quicker) < travel(&bent) + 0.02,
+                "{robot:?}: {} from {} (the bend's {})",
+                travel(&quicker),
+                travel(&swung),
+                travel(&bent)
+            );
+        }
+    }
+}

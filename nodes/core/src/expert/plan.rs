@@ -151,23 +151,35 @@ pub(crate) fn plan(
     None
 }
 
-/// `path` with corners cut where the straight line between two of its points is free, then
-/// points in line dropped.
+/// `path` shortened: lines between random points along it (not only its corners) replace
+/// the stretch between them where they are free and shorter, then a greedy pass keeps, from
+/// each point, the furthest one reachable in a straight line.
 fn shortcut(space: &Space, mut path: Vec<Joints>, rng: &mut Mt19937) -> Vec<Joints> {
     for _ in 0..SHORTCUTS {
         if path.len() < 3 {
             break;
         }
-        let n = path.len() as u32;
-        let a = rng.randbelow(n) as usize;
-        let b = rng.randbelow(n) as usize;
-        let (a, b) = (a.min(b), a.max(b));
-        if b - a < 2 {
+        let total = path_length(&path);
+        let (s1, s2) = (rng.random_sample() * total, rng.random_sample() * total);
+        let (s1, s2) = (s1.min(s2), s1.max(s2));
+        let (i, a) = point_at(&path, s1);
+        let (j, b) = point_at(&path, s2);
+        // `a` lies on the segment from path[i], `b` on the one from path[j]. The pieces of
+        // those segments are checked again: a check samples a line at fixed spacing from its
+        // start, so a piece is sampled at other points than the whole was.
+        if i == j
+            || joint_distance(&a, &b) >= s2 - s1 - 1e-6
+            || !space.line_free(&a, &b)
+            || !space.line_free(&path[i], &a)
+            || !space.line_free(&b, &path[j + 1])
+        {
             continue;
         }
-        if space.line_free(&path[a], &path[b]) {
-            path.drain(a + 1..b);
-        }
+        let mut shorter = path[..=i].to_vec();
+        shorter.push(a);
+        shorter.push(b);
+        shorter.extend_from_slice(&path[j + 1..]);
+        path = shorter;
     }
     // A final greedy pass: from each kept point, straight to the furthest point reachable.
     let mut out = vec![path[0]];
@@ -183,9 +195,27 @@ fn shortcut(space: &Space, mut path: Vec<Joints>, rng: &mut Mt19937) -> Vec<Join
     out
 }
 
+/// The point `s` (rad, along the path's length) along `path`, and the index of the segment it
+/// lies on (from `path[i]` towards `path[i + 1]`).
+fn point_at(path: &[Joints], s: f64) -> (usize, Joints) {
+    let mut left = s;
+    for i in 0..path.len() - 1 {
+        let d = joint_distance(&path[i], &path[i + 1]);
+        if left <= d || i + 2 == path.len() {
+            let f = if d > 0.0 {
+                (left / d).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            return (i, lerp(&path[i], &path[i + 1], f));
+        }
+        left -= d;
+    }
+    (0, path[0])
+}
+
 /// The time-relevant length of a path (rad, summed largest joint differences).
-#[cfg(test)]
-fn path_length(path: &[Joints]) -> f64 {
+pub(crate) fn path_length(path: &[Joints]) -> f64 {
     path.windows(2).map(|w| joint_distance(&w[0], &w[1])).sum()
 }
 

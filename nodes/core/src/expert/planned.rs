@@ -16,13 +16,13 @@ use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 
 use super::clearance::{Clearance, MIN_CLEARANCE};
 use super::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
-use super::motion::{pad_ik, pad_ik_clear, pad_ik_solutions, pads_at};
+use super::motion::{least_travel, pad_ik, pad_ik_clear, pad_ik_solutions, pads_at};
 use super::plan::{Space, plan};
 use super::track::{Joints, Leg, Tracker, joint_distance};
 use super::{EpisodeOutcome, run_with};
 use crate::TaskSpec;
 use crate::arena::{Primitive, ROBOT_BASE_POSITION, TRASH_CAN, arena_parts, object_geometry};
-use crate::axes::{Objective, Obstacle};
+use crate::axes::{Object, Objective, Obstacle};
 use crate::env::{Action, Env};
 use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model};
 
@@ -39,8 +39,6 @@ const TOP_BACKOFF: f64 = 0.06;
 const GRASP_TILTS: [f64; 2] = [0.0, 0.45];
 /// What a leaning grasp counts as in joint travel (rad) when grasps are compared.
 const LEANING: f64 = 10.0;
-/// Grasp candidates tried per approach.
-const MAX_CANDIDATES: usize = 16;
 /// How far (m) the object's bottom is above the walls of what it is dropped into.
 const DROP_CLEARANCE: f64 = 0.03;
 /// Where the object's origin is lowered to in bin 2 (m): 3 cm under the 0.9 m line below which
@@ -91,11 +89,16 @@ const RETREAT: f64 = 0.08;
 /// fingers of a side grasp come within millimetres of the floor, and the model's spheres
 /// round them outwards.
 const LEAST_END_CLEARANCE: f64 = -0.005;
+/// The clearance (m) a pose's quicker variant must keep to replace it ([`quicker`]): without
+/// it the elbow swung closer to the object wall's top and box grasps behind it failed.
+const KEPT_CLEARANCE: f64 = 0.03;
 /// Grasps tried in all.
 const MAX_ATTEMPTS: u32 = 3;
 /// Turns (rad) of the gripper about the vertical tried for the carry's end, besides the turn
 /// of the arm's base from the object to the goal.
-const CARRY_TURNS: [f64; 7] = [0.0, -0.3, 0.3, -0.6, 0.6, -0.9, 0.9];
+const CARRY_TURNS: [f64; 17] = [
+    0.0, -0.3, 0.3, -0.6, 0.6, -0.9, 0.9, -1.2, 1.2, -1.5, 1.5, -1.9, 1.9, -2.4, 2.4, -2.8, 2.8,
+];
 
 /// The stages of an episode, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -120,6 +123,15 @@ pub enum Stage {
     Retreat,
     /// Holding still until the episode ends.
     Done,
+}
+
+/// A way into a grasp: what it costs (joint travel to the pre-grasp, more for a leaning top
+/// grasp), the pre-grasp's joints, the grasp, and the straight descent into it.
+struct ApproachOption {
+    cost: f64,
+    pre: Joints,
+    grasp: Grasp,
+    descent: Vec<Joints>,
 }
 
 /// The planned expert of one task.
@@ -448,6 +460,8 @@ impl PlannedExpert {
                 - object_geometry(self.task.object).bottom_offset,
         );
         let mut options: Vec<(f64, Joints, Vec<Joints>)> = Vec::new();
+        // Poses with the object inside, for a planned way in where no straight slide is free.
+        let mut insides: Vec<(f64, Joints)> = Vec::new();
         for (lane, yaw, pitch) in SHELF_LANES_X.into_iter().flat_map(|lane| {
             SHELF_YAWS
                 .into_iter()
@@ -480,6 +494,10 @@ impl PlannedExpert {
                 else {
                     continue;
                 };
+                let end = *slide.last().expect("a point");
+                if carrying.at(model, &end) >= LEAST_END_CLEARANCE {
+                    insides.push((joint_distance(&q, &end), end));
+                }
                 if slide
                     .iter()
                     .any(|c| carrying.at(model, c) < LEAST_END_CLEARANCE)
@@ -493,6 +511,14 @@ impl PlannedExpert {
         for (_, start, slide) in options.into_iter().take(3) {
             if let Some(path) = self.plan_path(env, model, &carrying, q, start) {
                 return Some(vec![Leg::new(path), Leg::new(slide)]);
+            }
+        }
+        // No straight way in keeps clear (past the goal wall the forearm would cross it):
+        // a path planned all the way in.
+        insides.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (_, inside) in insides.into_iter().take(3) {
+            if let Some(path) = self.plan_path(env, model, &carrying, q, inside) {
+                return Some(vec![Leg::new(path)]);
             }
         }
         None
@@ -510,7 +536,8 @@ impl PlannedExpert {
 
     /// A free path to a pre-grasp, the grasp, and the straight descent into it: of the
     /// candidates the arm reaches clear of the arena and the object, the one with the least
-    /// joint travel.
+    /// joint travel. Side grasps pointing towards bin 2 are tried first (the carry and the
+    /// push start well from them); only where none has a path, every other heading.
     fn plan_approach(
         &mut self,
         env: &Env,
@@ -518,11 +545,33 @@ impl PlannedExpert {
         object: Point3<f64>,
         rotation: UnitQuaternion<f64>,
     ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
-        let model = env.world().model;
         let around = self.clearance.with_object(
             self.task.object,
             &Isometry3::from_parts(object.coords.into(), rotation),
         );
+        let first = self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
+        if let Some(found) = self.plan_first(env, &around, q, first) {
+            return Some(found);
+        }
+        if !matches!(self.task.object, Object::Plate | Object::Dumbbell) {
+            return None;
+        }
+        let others = self.approach_options(env, q, object, rotation, &around, Headings::Around);
+        self.plan_first(env, &around, q, others)
+    }
+
+    /// The ways into a grasp of the object at `object` (side grasps pointing along
+    /// `headings`) whose pre-grasp and descent keep clear, cheapest first.
+    fn approach_options(
+        &self,
+        env: &Env,
+        q: Joints,
+        object: Point3<f64>,
+        rotation: UnitQuaternion<f64>,
+        around: &Clearance,
+        headings: Headings,
+    ) -> Vec<ApproachOption> {
+        let model = env.world().model;
         // Top grasps also leaning towards the robot: over a wall near it, a vertical gripper
         // hangs the Panda's forearm on the wall.
         let candidates = GRASP_TILTS.into_iter().flat_map(|tilt| {
@@ -535,14 +584,13 @@ impl PlannedExpert {
                 position: object,
                 rotation,
                 tilt,
-                headings: Headings::TowardsBin2,
+                headings,
             })
             .into_iter()
             .filter(move |g| tilt == 0.0 || g.top_down)
-            .take(MAX_CANDIDATES)
             .map(move |g| (tilt, g))
         });
-        let mut options: Vec<(f64, Joints, Grasp, Vec<Joints>)> = Vec::new();
+        let mut options = Vec::new();
         for (tilt, grasp) in candidates {
             // The planned approach keeps clear of the object, so the straight stretch into a
             // top grasp can be short.
@@ -557,6 +605,7 @@ impl PlannedExpert {
             let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
             solutions.truncate(4);
             for pre in solutions {
+                let pre = quicker(model, around, &q, pre, grasp.pre(), grasp.orientation);
                 if around.at(model, &pre) < LEAST_END_CLEARANCE {
                     continue;
                 }
@@ -574,13 +623,30 @@ impl PlannedExpert {
                 }
                 // A leaning grasp only where no upright one will do.
                 let cost = joint_distance(&q, &pre) + if tilt > 0.0 { LEANING } else { 0.0 };
-                options.push((cost, pre, grasp, descent));
+                options.push(ApproachOption {
+                    cost,
+                    pre,
+                    grasp,
+                    descent,
+                });
             }
         }
-        options.sort_by(|a, b| a.0.total_cmp(&b.0));
-        for (_, pre, grasp, descent) in options {
-            if let Some(path) = self.plan_path(env, model, &around, q, pre) {
-                return Some((path, grasp, descent));
+        options.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        options
+    }
+
+    /// The first of `options` (cheapest first) with a free path from `q` to its pre-grasp.
+    fn plan_first(
+        &mut self,
+        env: &Env,
+        around: &Clearance,
+        q: Joints,
+        options: Vec<ApproachOption>,
+    ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
+        let model = env.world().model;
+        for option in options {
+            if let Some(path) = self.plan_path(env, model, around, q, option.pre) {
+                return Some((path, option.grasp, option.descent));
             }
         }
         None
@@ -612,9 +678,25 @@ impl PlannedExpert {
         let mut ends: Vec<(f64, Joints)> = Vec::new();
         for extra in CARRY_TURNS {
             let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), base_turn + extra);
-            let (solved, met) = pad_ik(model, &q, goal + turn * self.held, turn * orientation);
-            if met && carrying.at(model, &solved) >= LEAST_END_CLEARANCE {
-                ends.push((joint_distance(&q, &solved), solved));
+            let (pad_end, orientation_end) = (goal + turn * self.held, turn * orientation);
+            let (solved, met) = pad_ik(model, &q, pad_end, orientation_end);
+            if met {
+                let solved = quicker(model, &carrying, &q, solved, pad_end, orientation_end);
+                if carrying.at(model, &solved) >= LEAST_END_CLEARANCE {
+                    ends.push((joint_distance(&q, &solved), solved));
+                    continue;
+                }
+            }
+            // The IK from here finds one way of holding that pose: where it meets the arena
+            // (or nothing), look for the others.
+            for solved in pad_ik_solutions(model, &q, pad_end, orientation_end)
+                .into_iter()
+                .take(3)
+            {
+                let solved = quicker(model, &carrying, &q, solved, pad_end, orientation_end);
+                if carrying.at(model, &solved) >= LEAST_END_CLEARANCE {
+                    ends.push((joint_distance(&q, &solved), solved));
+                }
             }
         }
         ends.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -650,6 +732,25 @@ impl PlannedExpert {
             .wrapping_mul(7919)
             .wrapping_add(self.requests);
         plan(&space, &from, &to, seed, PLAN_NODES)
+    }
+}
+
+/// `solved` moved along the arm's self-motion to where the move from `q` takes least time
+/// ([`least_travel`]), unless that brings the arm closer to the arena than [`KEPT_CLEARANCE`]
+/// (or than `solved` is already): time is not traded for a near miss.
+fn quicker(
+    model: &RobotModel,
+    clearance: &Clearance,
+    q: &Joints,
+    solved: Joints,
+    pad: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+) -> Joints {
+    let moved = least_travel(model, q, solved, pad, orientation);
+    if clearance.at(model, &moved) >= clearance.at(model, &solved).min(KEPT_CLEARANCE) {
+        moved
+    } else {
+        solved
     }
 }
 
