@@ -17,7 +17,7 @@ use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 use super::clearance::{Clearance, MIN_CLEARANCE};
 use super::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
 use super::motion::{least_travel, pad_ik, pad_ik_clear, pad_ik_solutions, pads_at};
-use super::plan::{Space, plan};
+use super::plan::{Space, path_length, plan};
 use super::track::{Joints, Leg, Tracker, joint_distance};
 use super::{EpisodeOutcome, run_with};
 use crate::TaskSpec;
@@ -33,6 +33,11 @@ const GRIP_STEPS: u32 = 10;
 const LINE_SPACING: f64 = 0.01;
 /// Tree nodes a planning request may grow before it gives up.
 const PLAN_NODES: usize = 10000;
+/// Searches made for one path while the best found is a detour: each finds its own way round
+/// (the random trees differ), the shortest is kept.
+const PLAN_TRIES: usize = 4;
+/// A path at most this much longer than the straight move is kept as it is.
+const DETOUR_ACCEPTED: f64 = 1.1;
 /// The longest straight stretch (m) into a top grasp.
 const TOP_BACKOFF: f64 = 0.06;
 /// Leans (rad) of a top grasp's approach towards the robot, tried in turn.
@@ -727,11 +732,29 @@ impl PlannedExpert {
             limits: limits(model),
             free: &free,
         };
-        self.requests += 1;
-        let seed = (env.seed() as u32)
-            .wrapping_mul(7919)
-            .wrapping_add(self.requests);
-        plan(&space, &from, &to, seed, PLAN_NODES)
+        let direct = joint_distance(&from, &to);
+        let mut best: Option<Vec<Joints>> = None;
+        for _ in 0..PLAN_TRIES {
+            self.requests += 1;
+            let seed = (env.seed() as u32)
+                .wrapping_mul(7919)
+                .wrapping_add(self.requests);
+            let Some(path) = plan(&space, &from, &to, seed, PLAN_NODES) else {
+                // Where one search found nothing, another is unlikely to.
+                break;
+            };
+            if best
+                .as_ref()
+                .is_none_or(|b| path_length(&path) < path_length(b))
+            {
+                best = Some(path);
+            }
+            let length = path_length(best.as_ref().expect("set above"));
+            if length <= direct * DETOUR_ACCEPTED {
+                break;
+            }
+        }
+        best
     }
 }
 
