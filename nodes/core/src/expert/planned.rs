@@ -36,7 +36,7 @@ const LINE_SPACING: f64 = 0.01;
 /// (one shelf episode spent 41 s failing with 10,000).
 const PLAN_NODES: usize = 4000;
 /// Pre-grasps a path is searched to, cheapest first: a search that finds nothing grows its
-/// whole 10,000 nodes (~0.3 s), and behind the door 80 candidates could all fail.
+/// whole tree, and behind the door 80 candidates could all fail in turn.
 const PLANNED_OPTIONS: usize = 8;
 /// Searches made for one path while the best found is a detour: each finds its own way round
 /// (the random trees differ), the shortest is kept.
