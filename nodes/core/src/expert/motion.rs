@@ -6,6 +6,7 @@ use nalgebra::{Point3, SVector, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 use super::clearance::Clearance;
+use super::track::joint_distance;
 use crate::kinematics::{IkResult, IkTarget, link_pose, null_space_motion, solve_ik};
 use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel};
 
@@ -227,11 +228,7 @@ pub(super) fn least_travel(
     pad: Vector3<f64>,
     orientation: UnitQuaternion<f64>,
 ) -> [f64; ARM_DOF] {
-    let travel = |c: &[f64; ARM_DOF]| {
-        (0..ARM_DOF)
-            .map(|j| (c[j] - q[j]).abs())
-            .fold(0.0, f64::max)
-    };
+    let travel = |c: &[f64; ARM_DOF]| joint_distance(c, q);
     let (mut best, mut best_travel) = (solved, travel(&solved));
     let mut step = LEAST_TRAVEL_STEP;
     for _ in 0..LEAST_TRAVEL_STEPS {
@@ -285,11 +282,7 @@ mod tests {
                 bent[j] += by;
             }
             let (pad, orientation) = pads_at(model, &bent);
-            let travel = |c: &[f64; ARM_DOF]| {
-                (0..ARM_DOF)
-                    .map(|j| (c[j] - q[j]).abs())
-                    .fold(0.0, f64::max)
-            };
+            let travel = |c: &[f64; ARM_DOF]| joint_distance(c, &q);
             // The elbow swung by turning the shoulder (the way that moves the joints more), the
             // pads held.
             let swing_by = |sign: f64| {

@@ -626,8 +626,8 @@ impl PlannedExpert {
             let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
             solutions.truncate(4);
             for pre in solutions {
-                let pre = quicker(model, around, &q, pre, grasp.pre(), grasp.orientation);
-                if around.at(model, &pre) < LEAST_END_CLEARANCE {
+                let (pre, gap) = quicker(model, around, &q, pre, grasp.pre(), grasp.orientation);
+                if gap < LEAST_END_CLEARANCE {
                     continue;
                 }
                 let Some(descent) = line(model, pre, grasp.pre(), grasp.pad, grasp.orientation)
@@ -704,13 +704,18 @@ impl PlannedExpert {
         for extra in CARRY_TURNS {
             let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), base_turn + extra);
             let (pad_end, orientation_end) = (goal + turn * self.held, turn * orientation);
-            let (solved, met) = pad_ik(model, &q, pad_end, orientation_end);
-            if met {
-                let solved = quicker(model, &carrying, &q, solved, pad_end, orientation_end);
-                if carrying.at(model, &solved) >= LEAST_END_CLEARANCE {
+            // The quicker variant of `solved`, kept as an end where it keeps clear.
+            let mut keep = |solved: Joints| {
+                let (solved, gap) = quicker(model, &carrying, &q, solved, pad_end, orientation_end);
+                let clear = gap >= LEAST_END_CLEARANCE;
+                if clear {
                     ends.push((joint_distance(&q, &solved), solved));
-                    continue;
                 }
+                clear
+            };
+            let (solved, met) = pad_ik(model, &q, pad_end, orientation_end);
+            if met && keep(solved) {
+                continue;
             }
             // The IK from here finds one way of holding that pose: where it meets the arena
             // (or nothing), look for the others.
@@ -718,10 +723,7 @@ impl PlannedExpert {
                 .into_iter()
                 .take(3)
             {
-                let solved = quicker(model, &carrying, &q, solved, pad_end, orientation_end);
-                if carrying.at(model, &solved) >= LEAST_END_CLEARANCE {
-                    ends.push((joint_distance(&q, &solved), solved));
-                }
+                keep(solved);
             }
         }
         ends.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -753,7 +755,7 @@ impl PlannedExpert {
             free: &free,
         };
         let direct = joint_distance(&from, &to);
-        let mut best: Option<Vec<Joints>> = None;
+        let mut best: Option<(f64, Vec<Joints>)> = None;
         for _ in 0..PLAN_TRIES {
             self.requests += 1;
             let seed = (env.seed() as u32)
@@ -763,24 +765,25 @@ impl PlannedExpert {
                 // Where one search found nothing, another is unlikely to.
                 break;
             };
+            let length = path_length(&path);
+            if best.as_ref().is_none_or(|(shortest, _)| length < *shortest) {
+                best = Some((length, path));
+            }
             if best
                 .as_ref()
-                .is_none_or(|b| path_length(&path) < path_length(b))
+                .is_some_and(|(shortest, _)| *shortest <= direct * DETOUR_ACCEPTED)
             {
-                best = Some(path);
-            }
-            let length = path_length(best.as_ref().expect("set above"));
-            if length <= direct * DETOUR_ACCEPTED {
                 break;
             }
         }
-        best
+        best.map(|(_, path)| path)
     }
 }
 
 /// `solved` moved along the arm's self-motion to where the move from `q` takes least time
 /// ([`least_travel`]), unless that brings the arm closer to the arena than [`KEPT_CLEARANCE`]
-/// (or than `solved` is already): time is not traded for a near miss.
+/// (or than `solved` is already): time is not traded for a near miss. Returns the pose kept
+/// and its clearance.
 fn quicker(
     model: &RobotModel,
     clearance: &Clearance,
@@ -788,12 +791,13 @@ fn quicker(
     solved: Joints,
     pad: Vector3<f64>,
     orientation: UnitQuaternion<f64>,
-) -> Joints {
+) -> (Joints, f64) {
     let moved = least_travel(model, q, solved, pad, orientation);
-    if clearance.at(model, &moved) >= clearance.at(model, &solved).min(KEPT_CLEARANCE) {
-        moved
+    let (moved_gap, solved_gap) = (clearance.at(model, &moved), clearance.at(model, &solved));
+    if moved_gap >= solved_gap.min(KEPT_CLEARANCE) {
+        (moved, moved_gap)
     } else {
-        solved
+        (solved, solved_gap)
     }
 }
 
