@@ -4,7 +4,7 @@
 pub(crate) static MATCHED_WRITERS_GENERATION: AtomicU64 = AtomicU64::new(0);
 
 use std::{
-  collections::BTreeMap,
+  collections::{BTreeMap, BTreeSet},
   fmt, iter,
   rc::Rc,
   sync::{
@@ -757,6 +757,8 @@ impl Reader {
     );
     if !self.like_stateless {
       let my_entity_id = self.my_guid.entity_id; // to please borrow checker
+      let reliable = self.reliability != policy::Reliability::BestEffort;
+      let mut unannounced_gap = None;
       if let Some(writer_proxy) = self.matched_writer_mut(writer_guid) {
         if writer_proxy.should_ignore_change(writer_sn) {
           // change already present
@@ -772,6 +774,9 @@ impl Reader {
         }
         // Add the change and get the instant
         writer_proxy.received_changes_add(writer_sn, receive_timestamp);
+        if reliable {
+          unannounced_gap = gap_before_first_heartbeat(writer_proxy, writer_sn);
+        }
       } else {
         // no writer proxy found
         debug!(
@@ -784,6 +789,9 @@ impl Reader {
         if writer_guid.entity_id.entity_kind.is_user_defined() {
           return;
         }
+      }
+      if let Some(missing) = unannounced_gap {
+        self.request_unannounced_gap(writer_guid, missing);
       }
     } else {
       // stateless reader: nothing to do before making cache change
@@ -1425,6 +1433,30 @@ impl Reader {
     self.encode_and_send(message, destination_guid, dst_locator_list);
   }
 
+  // CompoSuite-ROS patch: ask a writer at once for the samples missing below one it sent
+  // before its first HEARTBEAT reached this reader (see gap_before_first_heartbeat).
+  fn request_unannounced_gap(&mut self, writer_guid: GUID, missing: SequenceNumberSet) {
+    self.with_mutable_writer_proxy(writer_guid, |this, writer_proxy| {
+      let acknack = AckNack {
+        reader_id: this.entity_id(),
+        writer_id: writer_guid.entity_id,
+        reader_sn_state: missing,
+        count: writer_proxy.next_ack_nack_sequence_number(),
+      };
+      let flags = BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Endianness)
+        | BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Final);
+      this.send_acknack_to(
+        flags,
+        acknack,
+        InfoDestination {
+          guid_prefix: writer_guid.prefix,
+        },
+        &writer_proxy.unicast_locator_list,
+        writer_guid,
+      );
+    });
+  }
+
   pub fn send_preemptive_acknacks(&mut self) {
     if self.like_stateless {
       info!(
@@ -1510,6 +1542,35 @@ impl fmt::Debug for Reader {
       .field("received_heartbeat_count", &self.received_heartbeat_count)
       .finish()
   }
+}
+
+// CompoSuite-ROS patch: the samples a reliable reader should ask `writer_proxy` for at once,
+// having just received `writer_sn`: those missing right below it (a gap that this sample is the
+// first to show), but only while no HEARTBEAT of the writer has been processed. A writer's first
+// sample can arrive before this reader has matched the writer (the writer learnt of the reader
+// first, as a Fast DDS service client does of a server it has just discovered): it is dropped,
+// and the next sample is withheld behind the gap. Without a request the gap closes only with the
+// writer's next periodic HEARTBEAT, which Fast DDS sends every 3 s by default: each new rclpy
+// client's first service call then waited ~3 s. Once a HEARTBEAT has come, the reader answers
+// HEARTBEATs as before and asks for nothing on its own.
+fn gap_before_first_heartbeat(
+  writer_proxy: &RtpsWriterProxy,
+  writer_sn: SequenceNumber,
+) -> Option<SequenceNumberSet> {
+  let below = writer_sn - SequenceNumber::new(1);
+  if writer_proxy.received_heartbeat_count != 0
+    || writer_proxy.all_ackable_before() > below
+    || writer_proxy.should_ignore_change(below)
+  {
+    return None;
+  }
+  let missing = writer_proxy.missing_seqnums(writer_proxy.all_ackable_before(), below);
+  let first = *missing.first()?;
+  let set: BTreeSet<_> = missing
+    .into_iter()
+    .take_while(|sn| *sn < first + SequenceNumber::new(256))
+    .collect();
+  Some(SequenceNumberSet::from_base_and_set(first, &set))
 }
 
 #[cfg(test)]
@@ -1969,6 +2030,124 @@ mod tests {
         .unwrap()
         .all_ackable_before(),
       SequenceNumber::new(6)
+    );
+  }
+
+  // CompoSuite-ROS patch: a reliable reader asks a writer at once for a gap that a sample shows
+  // before the writer's first HEARTBEAT, once per gap; after a HEARTBEAT it waits for the next.
+  #[test]
+  fn reader_asks_for_a_gap_before_the_first_heartbeat() {
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let topic_name = "gap_before_heartbeat";
+    let reliable_qos = QosPolicyBuilder::new()
+      .reliability(Reliability::Reliable {
+        max_blocking_time: Duration::from_millis(100),
+      })
+      .build();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      topic_name.to_string(),
+      TypeDesc::new("test_type".to_string()),
+      &reliable_qos,
+    );
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_guid = GUID::dummy_test_guid(EntityKind::READER_NO_KEY_USER_DEFINED);
+    let mut reader = Reader::new(
+      ReaderIngredients {
+        guid: reader_guid,
+        notification_sender,
+        status_sender,
+        topic_name: topic_name.to_string(),
+        topic_cache_handle,
+        like_stateless: false,
+        qos_policy: reliable_qos.clone(),
+        data_reader_command_receiver: reader_command_receiver,
+        data_reader_waker: Arc::new(Mutex::new(None)),
+        poll_event_sender: notification_event_sender,
+        security_plugins: None,
+        discovery_notify: None,
+      },
+      Rc::new(UDPSender::new(0).unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      mr_state.unicast_reply_locator_list.to_vec(),
+      mr_state.multicast_reply_locator_list.to_vec(),
+      &reliable_qos,
+    );
+    let sent = |reader: &Reader| {
+      reader
+        .matched_writer(writer_guid)
+        .unwrap()
+        .sent_ack_nack_count
+    };
+    let data = |sn: i64| Data {
+      reader_id: reader_guid.entity_id,
+      writer_id: writer_guid.entity_id,
+      writer_sn: SequenceNumber::new(sn),
+      ..Data::default()
+    };
+    let flags = BitFlags::<DATA_Flags>::from_flag(DATA_Flags::Data);
+    assert_eq!(sent(&reader), 1, "the preemptive ACKNACK on match");
+
+    // What a sample shows missing below it, before any HEARTBEAT.
+    let proxy = reader.matched_writer(writer_guid).unwrap();
+    assert_eq!(
+      gap_before_first_heartbeat(proxy, SequenceNumber::new(1)),
+      None
+    );
+    assert_eq!(
+      gap_before_first_heartbeat(proxy, SequenceNumber::new(3)),
+      Some(SequenceNumberSet::from_base_and_set(
+        SequenceNumber::new(1),
+        &[1, 2].map(SequenceNumber::new).into_iter().collect()
+      ))
+    );
+
+    // Sample 1 was lost (sent before this reader matched the writer): sample 2 shows the gap.
+    reader.handle_data_msg(data(2), flags, &mr_state);
+    assert_eq!(sent(&reader), 2, "sample 2 asks for sample 1");
+    reader.handle_data_msg(data(3), flags, &mr_state);
+    assert_eq!(sent(&reader), 2, "sample 3 shows no new gap");
+    reader.handle_data_msg(data(5), flags, &mr_state);
+    assert_eq!(sent(&reader), 3, "sample 5 asks for sample 4");
+    let proxy = reader.matched_writer(writer_guid).unwrap();
+    assert_eq!(
+      gap_before_first_heartbeat(proxy, SequenceNumber::new(6)),
+      None,
+      "nothing missing right below 6"
+    );
+
+    // The first HEARTBEAT is answered as always; after it the reader asks for nothing itself.
+    let heartbeat = Heartbeat {
+      reader_id: reader.entity_id(),
+      writer_id: writer_guid.entity_id,
+      first_sn: SequenceNumber::new(1),
+      last_sn: SequenceNumber::new(5),
+      count: 1,
+    };
+    assert!(reader.handle_heartbeat_msg(&heartbeat, false, &mr_state));
+    assert_eq!(sent(&reader), 4);
+    reader.handle_data_msg(data(8), flags, &mr_state);
+    assert_eq!(
+      sent(&reader),
+      4,
+      "after a HEARTBEAT a gap waits for the next one"
     );
   }
 
