@@ -553,7 +553,9 @@ impl PlannedExpert {
     /// A free path to a pre-grasp, the grasp, and the straight descent into it: of the
     /// candidates the arm reaches clear of the arena and the object, the one with the least
     /// joint travel. Side grasps pointing towards bin 2 are tried first (the carry and the
-    /// push start well from them); only where none has a path, every other heading.
+    /// push start well from them); only where none has a path, every other heading; for the
+    /// dumbbell, last, every heading pitched steeper (behind the door the hand must come down
+    /// from above the posts).
     fn plan_approach(
         &mut self,
         env: &Env,
@@ -573,7 +575,14 @@ impl PlannedExpert {
             return None;
         }
         let others = self.approach_options(env, q, object, rotation, &around, Headings::Around);
-        self.plan_first(env, &around, q, others)
+        if let Some(found) = self.plan_first(env, &around, q, others) {
+            return Some(found);
+        }
+        if self.task.object != Object::Dumbbell {
+            return None;
+        }
+        let steep = self.approach_options(env, q, object, rotation, &around, Headings::AroundSteep);
+        self.plan_first(env, &around, q, steep)
     }
 
     /// The ways into a grasp of the object at `object` (side grasps pointing along
