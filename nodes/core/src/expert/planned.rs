@@ -412,8 +412,22 @@ impl PlannedExpert {
     /// goal (round the goal wall's free end where the wall stands between them), the gripper
     /// as it is, the elbow swung away from the arena where it comes close.
     fn plan_slide(&mut self, env: &Env, q: Joints, object: Point3<f64>) -> Option<Vec<Leg>> {
-        let model = env.world().model;
         let carrying = self.carrying(env, &q);
+        self.slide_lines(env, &carrying, q, object)
+            .map(|(_, legs)| legs)
+    }
+
+    /// [`Self::plan_slide`]'s lines from the arm at `q` holding the object at `object` (the
+    /// elbow swung clear of the arena as `carrying` says), with the smallest gap the arm keeps
+    /// on them (the held object left out).
+    fn slide_lines(
+        &self,
+        env: &Env,
+        carrying: &Clearance,
+        q: Joints,
+        object: Point3<f64>,
+    ) -> Option<(f64, Vec<Leg>)> {
+        let model = env.world().model;
         let goal = env.goal();
         let round_the_wall = self.task.obstacle == Obstacle::GoalWall
             && goal.y > GOAL_WALL_Y
@@ -440,26 +454,27 @@ impl PlannedExpert {
             let mut gap = f64::INFINITY;
             for stop in stops {
                 let to = stop + offset;
-                let Some(points) = swinging_line(model, &carrying, from, pad, to, orientation)
+                let Some(points) = swinging_line(model, carrying, from, pad, to, orientation)
                 else {
                     continue 'lanes;
                 };
+                // The arm's own gap: the held object rides just off the floor on purpose.
                 gap = points
                     .iter()
-                    .map(|c| carrying.at(model, c))
+                    .map(|c| self.clearance.at(model, c))
                     .fold(gap, f64::min);
                 from = *points.last().expect("a point");
                 pad = to;
                 legs.push(Leg::new(points));
             }
             if gap >= LEAST_END_CLEARANCE {
-                return Some(legs);
+                return Some((gap, legs));
             }
             if best.as_ref().is_none_or(|(g, _)| gap > *g) {
                 best = Some((gap, legs));
             }
         }
-        best.map(|(_, legs)| legs)
+        best
     }
 
     /// Shelf: a free path, the object carried, to in front of the shelf's opening with the
@@ -567,7 +582,27 @@ impl PlannedExpert {
             self.task.object,
             &Isometry3::from_parts(object.coords.into(), rotation),
         );
-        let first = self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
+        let mut first =
+            self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
+        let side = matches!(self.task.object, Object::Plate | Object::Dumbbell);
+        if self.pushing() && side {
+            // A push whose lines would drag the arm along the arena from every first-choice
+            // grasp: the other headings too, those with clear lines first.
+            let any_clear;
+            (first, any_clear) = self.clear_slides_first(env, first);
+            if !any_clear {
+                first.extend(self.approach_options(
+                    env,
+                    q,
+                    object,
+                    rotation,
+                    &around,
+                    Headings::Around,
+                ));
+                first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+                first = self.clear_slides_first(env, first).0;
+            }
+        }
         if let Some(found) = self.plan_first(env, &around, q, first) {
             return Some(found);
         }
@@ -678,12 +713,50 @@ impl PlannedExpert {
         options: Vec<ApproachOption>,
     ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
         let model = env.world().model;
+        // A push goes on from the grasp in straight lines: grasps from which they keep clear
+        // first (in every tier of headings; ranking twice changes nothing).
+        let options = if self.pushing() {
+            self.clear_slides_first(env, options).0
+        } else {
+            options
+        };
         for option in options.into_iter().take(PLANNED_OPTIONS) {
             if let Some(path) = self.plan_path(env, model, around, q, option.pre) {
                 return Some((path, option.grasp, option.descent));
             }
         }
         None
+    }
+
+    /// `options` (cheapest first) with those first from whose grasp the push's straight lines
+    /// keep the arm clear (behind the object wall a gripper pointing towards bin 2 can leave
+    /// the wrist over the wall, and the push then drags it along the wall); whether any does.
+    /// Only the first [`PLANNED_OPTIONS`] are looked at.
+    fn clear_slides_first(
+        &self,
+        env: &Env,
+        options: Vec<ApproachOption>,
+    ) -> (Vec<ApproachOption>, bool) {
+        let model = env.world().model;
+        let pose = object_pose(env);
+        let object = Point3::from(pose.translation.vector);
+        let mut ranked: Vec<(bool, ApproachOption)> = options
+            .into_iter()
+            .take(PLANNED_OPTIONS)
+            .map(|option| {
+                let grasped = *option.descent.last().expect("a point");
+                let carrying = self
+                    .clearance
+                    .holding(model, &grasped, self.task.object, &pose);
+                let clear = self
+                    .slide_lines(env, &carrying, grasped, object)
+                    .is_some_and(|(gap, _)| gap >= LEAST_END_CLEARANCE);
+                (clear, option)
+            })
+            .collect();
+        ranked.sort_by_key(|(clear, _)| !clear);
+        let any = ranked.first().is_some_and(|(clear, _)| *clear);
+        (ranked.into_iter().map(|(_, option)| option).collect(), any)
     }
 
     /// A free path, the object carried, from just off the floor to where it is let go: above
