@@ -570,7 +570,9 @@ impl PlannedExpert {
     /// joint travel. Side grasps pointing towards bin 2 are tried first (the carry and the
     /// push start well from them); only where none has a path, every other heading; for the
     /// dumbbell, last, every heading pitched steeper (behind the door the hand must come down
-    /// from above the posts).
+    /// from above the posts). For a push, grasps from which its lines keep clear go first in
+    /// each of these ([`Self::clear_slides_first`]); for the plate and the dumbbell, where no
+    /// first-choice heading gives such lines, the first two are weighed together.
     fn plan_approach(
         &mut self,
         env: &Env,
@@ -582,15 +584,15 @@ impl PlannedExpert {
             self.task.object,
             &Isometry3::from_parts(object.coords.into(), rotation),
         );
+        let side = matches!(self.task.object, Object::Plate | Object::Dumbbell);
         let mut first =
             self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
-        let side = matches!(self.task.object, Object::Plate | Object::Dumbbell);
-        if self.pushing() && side {
-            // A push whose lines would drag the arm along the arena from every first-choice
-            // grasp: the other headings too, those with clear lines first.
+        if self.pushing() {
             let any_clear;
             (first, any_clear) = self.clear_slides_first(env, first);
-            if !any_clear {
+            if side && !any_clear {
+                // A push whose lines would drag the arm along the arena from every
+                // first-choice grasp: the other headings too, those with clear lines first.
                 first.extend(self.approach_options(
                     env,
                     q,
@@ -606,17 +608,23 @@ impl PlannedExpert {
         if let Some(found) = self.plan_first(env, &around, q, first) {
             return Some(found);
         }
-        if !matches!(self.task.object, Object::Plate | Object::Dumbbell) {
+        if !side {
             return None;
         }
-        let others = self.approach_options(env, q, object, rotation, &around, Headings::Around);
+        let others = self.pushes_clear_first(
+            env,
+            self.approach_options(env, q, object, rotation, &around, Headings::Around),
+        );
         if let Some(found) = self.plan_first(env, &around, q, others) {
             return Some(found);
         }
         if self.task.object != Object::Dumbbell {
             return None;
         }
-        let steep = self.approach_options(env, q, object, rotation, &around, Headings::AroundSteep);
+        let steep = self.pushes_clear_first(
+            env,
+            self.approach_options(env, q, object, rotation, &around, Headings::AroundSteep),
+        );
         self.plan_first(env, &around, q, steep)
     }
 
@@ -713,19 +721,22 @@ impl PlannedExpert {
         options: Vec<ApproachOption>,
     ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
         let model = env.world().model;
-        // A push goes on from the grasp in straight lines: grasps from which they keep clear
-        // first (in every tier of headings; ranking twice changes nothing).
-        let options = if self.pushing() {
-            self.clear_slides_first(env, options).0
-        } else {
-            options
-        };
         for option in options.into_iter().take(PLANNED_OPTIONS) {
             if let Some(path) = self.plan_path(env, model, around, q, option.pre) {
                 return Some((path, option.grasp, option.descent));
             }
         }
         None
+    }
+
+    /// `options` as [`Self::clear_slides_first`] orders them where the objective is Push (it
+    /// goes on from the grasp in straight lines), else as they are.
+    fn pushes_clear_first(&self, env: &Env, options: Vec<ApproachOption>) -> Vec<ApproachOption> {
+        if self.pushing() {
+            self.clear_slides_first(env, options).0
+        } else {
+            options
+        }
     }
 
     /// `options` (cheapest first) with those first from whose grasp the push's straight lines

@@ -1558,10 +1558,8 @@ fn gap_before_first_heartbeat(
   writer_sn: SequenceNumber,
 ) -> Option<SequenceNumberSet> {
   let below = writer_sn - SequenceNumber::new(1);
-  if writer_proxy.received_heartbeat_count != 0
-    || writer_proxy.all_ackable_before() > below
-    || writer_proxy.should_ignore_change(below)
-  {
+  // Nothing new to ask for where the sample right below is received or acknowledged already.
+  if writer_proxy.received_heartbeat_count != 0 || writer_proxy.should_ignore_change(below) {
     return None;
   }
   let missing = writer_proxy.missing_seqnums(writer_proxy.all_ackable_before(), below);
