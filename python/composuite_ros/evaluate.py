@@ -344,13 +344,30 @@ def run_episodes(jobs: Sequence[_Job], namespaces: Sequence[str], agent_spec: st
     return in_job_order(jobs, results)
 
 
+def _suite_name(task: str) -> str:
+    """`task` in the suite's spelling, from either spelling (any letter case)."""
+    from . import _native
+    names = {}
+    for suite, reference in _native.reference_task_names():
+        names[suite.lower()] = suite
+        names["/".join(reference).lower()] = suite
+    try:
+        return names[str(Task.parse(task)).lower()]
+    except KeyError:
+        raise ValueError(f"task {task!r} is not one of the 256: robot/object/obstacle/objective, "
+                         "e.g. IIWA/box/no_obstacle/pick_place or IIWA/Box/None/PickPlace") from None
+
+
 def evaluate(namespaces: Sequence[str] | None = None, *, backend: str | None = None,
              experiment: str = "default", num_train: int = 0, element: str = "", split_seed: int = 0,
              splits: Sequence[str] = ("train", "test"), max_tasks: int | None = None, episodes: int = 1,
              seed: int = 0, agent: str = "random", use_task_id_obs: bool = True, envs: int | None = None,
              horizon: int = 500, domain_id: int | None = None, timeout: float = 10.0,
-             progress: bool = True) -> tuple[dict[str, list[str]], list[EpisodeResult], list[Metric]]:
+             progress: bool = True, tasks: Sequence[str] | None = None
+             ) -> tuple[dict[str, list[str]], list[EpisodeResult], list[Metric]]:
     """The protocol as a function: (the split's task lists, every episode, the metrics).
+    `tasks` (names in either spelling) replaces the drawn split: they are the train list, and
+    the test list is empty.
 
     `backend`: "native" (in-process, `envs` environments, episodes of at most `horizon` steps)
     or "ros" (the suite's environments in `namespaces`, with the suite's horizon); by default
@@ -373,7 +390,10 @@ def evaluate(namespaces: Sequence[str] | None = None, *, backend: str | None = N
     unknown = set(splits) - {"train", "test"}
     if unknown or not splits:
         raise ValueError(f"splits {list(splits)}: choose from train, test")
-    if backend == "native":
+    if tasks:
+        lists = {"train": [_suite_name(t) for t in tasks], "test": []}
+        splits = ["train"]
+    elif backend == "native":
         from . import _native
         train, test = _native.sample_tasks(experiment, num_train, element, split_seed)
         lists = {"train": train, "test": test}
@@ -493,6 +513,9 @@ def parser() -> argparse.ArgumentParser:
                    help="training tasks: default 0..256, smallscale 0..64, holdout 1..193")
     p.add_argument("--element", default="", help="axis element for smallscale/holdout, e.g. IIWA, plate")
     p.add_argument("--split-seed", type=int, default=0, help="the reference's shuffling_seed")
+    p.add_argument("--tasks", nargs="+", default=None, metavar="TASK",
+                   help="evaluate these tasks instead of a drawn split (robot/object/obstacle/"
+                        "objective, either spelling; reported as the train list)")
     p.add_argument("--splits", default="train,test", help="which lists to run: train, test or train,test")
     p.add_argument("--max-tasks", type=int, default=None,
                    help="run only the first N tasks of each list (quick checks; the metrics then "
@@ -533,7 +556,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             namespaces, backend=backend, envs=args.envs, horizon=args.horizon, experiment=args.experiment, num_train=args.num_train, element=args.element,
             split_seed=args.split_seed, splits=splits, max_tasks=args.max_tasks, episodes=args.episodes,
             seed=args.seed, agent=args.agent, use_task_id_obs=not args.no_task_id_obs,
-            timeout=args.timeout, progress=not args.quiet)
+            timeout=args.timeout, progress=not args.quiet, tasks=args.tasks)
     except (ValueError, TimeoutError, RuntimeError) as err:
         print(f"composuite-eval: {err}", file=sys.stderr)
         return 2

@@ -278,7 +278,11 @@ def test_tasks_by_name_filter_and_split_file(tmp_path):
      "PickPlace, Push, Trashcan, Shelf)"),
     (["--tasks", "IIWA/box/pick_place"], "is not robot/object/obstacle/objective"),
     (["--types", "expertise"], "dataset type 'expertise' is unknown; valid: expert, medium"),
-    (["--types", "expert"], "cannot generate 'expert' data"),
+    (["--types", "medium-replay"], "cannot generate 'medium-replay' data: medium-replay is "
+                                   "what a learner saw"),
+    (["--types", "medium", "--target-success", "1.5"], "must lie strictly between 0 and 1"),
+    (["--types", "medium", "--medium-table", "/nonexistent/table.json"],
+     "medium noise table /nonexistent/table.json does not exist"),
     (["--robot", "UR5"], "unknown robot 'UR5'; valid: IIWA, Jaco, Gen3, Panda"),
     (["--transitions", "0"], "must be positive"),
     (["--transitions", "-5"], "must be positive"),

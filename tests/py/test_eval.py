@@ -147,6 +147,20 @@ def test_native_eval_needs_no_suite(tmp_path):
     assert both.returncode == 2 and "native backend runs its own environments" in both.stderr
 
 
+def test_native_eval_of_named_tasks(tmp_path):
+    """--tasks replaces the drawn split: the named tasks, in either spelling, are the train list."""
+    out = tmp_path / "named"
+    composuite_eval("--tasks", "IIWA/Box/None/PickPlace", "Jaco/plate/goal_wall/push",
+                    "--episodes", "2", "--horizon", "6", "--envs", "2", "--quiet", "--out", str(out))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["tasks"] == {"train": ["IIWA/box/no_obstacle/pick_place",
+                                          "Jaco/plate/goal_wall/push"], "test": []}
+    assert [(e["task"], e["seed"]) for e in summary["episodes"]] == \
+        [(t, s) for t in summary["tasks"]["train"] for s in (0, 1)]
+    bad = composuite_eval("--tasks", "IIWA/Box/Nne/PickPlace", check=False)
+    assert bad.returncode == 2 and "'IIWA/Box/Nne/PickPlace' is not one of the 256" in bad.stderr
+
+
 def test_eval_errors_are_clear(tmp_path):
     bad = composuite_eval("--agent", "no_such_module:Agent", "--timeout", "1", check=False)
     assert bad.returncode == 2 and "no_such_module" in bad.stderr

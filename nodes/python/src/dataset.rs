@@ -32,8 +32,8 @@ fn rows_dict<'py>(py: Python<'py>, rows: Rows) -> PyResult<Bound<'py, PyDict>> {
     Ok(dict)
 }
 
-/// Episodes of one task played by a built-in policy (`random`), seed after seed from
-/// `first_seed`, on `threads` threads; the rows do not depend on the thread count.
+/// Episodes of one task played by a built-in policy (`random`, or `expert` with `noise` on its
+/// joint values), seed after seed from `first_seed`, on `threads` threads; the rows do not depend on the thread count.
 #[pyclass(module = "composuite_ros._native")]
 pub struct Collector {
     inner: dataset::Collector,
@@ -42,17 +42,18 @@ pub struct Collector {
 #[pymethods]
 impl Collector {
     #[new]
-    #[pyo3(signature = (task, policy, *, first_seed = 0, threads = 1, horizon = 500))]
+    #[pyo3(signature = (task, policy, *, noise = 0.0, first_seed = 0, threads = 1, horizon = 500))]
     fn new(
         py: Python<'_>,
         task: &str,
         policy: &str,
+        noise: f64,
         first_seed: u64,
         threads: usize,
         horizon: u32,
     ) -> PyResult<Collector> {
         let task = parse_task(task)?;
-        let policy = DatasetPolicy::parse(policy).map_err(PyValueError::new_err)?;
+        let policy = DatasetPolicy::parse(policy, noise).map_err(PyValueError::new_err)?;
         let config = env_config(horizon)?;
         let inner = py
             .detach(|| dataset::Collector::new(task, config, policy, first_seed, threads))

@@ -1,9 +1,10 @@
 """`composuite-dataset`: CompoSuite's offline datasets, written by the suite.
 
-    composuite-dataset generate --out data --types random --tasks IIWA/box/no_obstacle/pick_place
+    composuite-dataset generate --out data --types expert medium random --tasks IIWA/box/no_obstacle/pick_place
     composuite-dataset generate --out data --robot IIWA --objective PickPlace --transitions 100000
     composuite-dataset generate --out data --split split_0.json --split-part train
     composuite-dataset verify data/random/IIWA_Box_None_PickPlace/data.hdf5
+    composuite-dataset calibrate-medium --robot IIWA --out medium_noise.json
     python examples/ppo_train.py --dataset-out run.hdf5 ...   # a learner's run, then:
     composuite-dataset subsample run.hdf5 --out data --transitions 1000000
     composuite-dataset from-bag runs/s1/bag --out data
@@ -17,6 +18,9 @@ import shlex
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from . import medium
 from .generate import DEFAULT_HORIZON, DEFAULT_TRANSITIONS, generate
 from .layout import (AXES, DATASET_TYPES, GENERATED_TYPES, REFERENCE_SPELLINGS, DatasetError,
                      select_tasks)
@@ -32,6 +36,37 @@ def _positive(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
     if value <= 0:
         raise argparse.ArgumentTypeError(f"must be positive; got {value}")
+    return value
+
+
+def _add_task_selection(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--tasks", nargs="*", default=[], metavar="TASK",
+                        help="tasks as robot/object/obstacle/objective, in the suite's spelling "
+                             "(IIWA/box/no_obstacle/pick_place) or the reference's "
+                             "(IIWA/Box/None/PickPlace)")
+    for axis in AXES:
+        parser.add_argument(f"--{axis}", nargs="+", default=[], metavar="NAME",
+                            help=f"keep tasks with these {axis}s: {', '.join(AXES[axis])} "
+                                 f"(or {', '.join(REFERENCE_SPELLINGS[axis])})")
+    parser.add_argument("--split", type=Path,
+                        help="a split file of the offline repo (_train_test_splits/*/split_N.json)")
+    parser.add_argument("--split-part", default="train",
+                        help="which list of the split file: train (default) or test")
+
+
+def _tasks(args):
+    return select_tasks(args.tasks, robot=args.robot, object=args.object,
+                        obstacle=args.obstacle, objective=args.objective, split=args.split,
+                        split_part=args.split_part)
+
+
+def _target(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"must lie strictly between 0 and 1; got {value}")
     return value
 
 
@@ -53,18 +88,7 @@ def _parser() -> argparse.ArgumentParser:
                      help=f"dataset types (default random); known: {', '.join(DATASET_TYPES)}; "
                           f"generated here: {', '.join(GENERATED_TYPES)} (medium-replay: see "
                           "`subsample`)")
-    gen.add_argument("--tasks", nargs="*", default=[], metavar="TASK",
-                     help="tasks as robot/object/obstacle/objective, in the suite's spelling "
-                          "(IIWA/box/no_obstacle/pick_place) or the reference's "
-                          "(IIWA/Box/None/PickPlace)")
-    for axis in AXES:
-        gen.add_argument(f"--{axis}", nargs="+", default=[], metavar="NAME",
-                         help=f"keep tasks with these {axis}s: {', '.join(AXES[axis])} "
-                              f"(or {', '.join(REFERENCE_SPELLINGS[axis])})")
-    gen.add_argument("--split", type=Path,
-                     help="a split file of the offline repo (_train_test_splits/*/split_N.json)")
-    gen.add_argument("--split-part", default="train",
-                     help="which list of the split file: train (default) or test")
+    _add_task_selection(gen)
     gen.add_argument("--transitions", type=_positive, default=DEFAULT_TRANSITIONS,
                      help=f"rows per file (default {DEFAULT_TRANSITIONS:,}, the authors')")
     gen.add_argument("--seed", type=int, default=0,
@@ -85,7 +109,33 @@ def _parser() -> argparse.ArgumentParser:
     gen.add_argument("--format", choices=("offline", "minari"), default="offline",
                      help="offline (the authors' layout, default) or minari (also a Minari "
                           "dataset per file, under MINARI_DATASETS_PATH)")
+    gen.add_argument("--target-success", type=_target, default=medium.DEFAULT_TARGET,
+                     help="medium: the share of episodes that succeed (default "
+                          f"{medium.DEFAULT_TARGET}); the expert's noise is taken from "
+                          "--medium-table, or calibrated first for a task it lacks")
+    gen.add_argument("--medium-table", type=Path, default=medium.TABLE,
+                     help="medium: the noise table (default: the one shipped with the suite, "
+                          "written by `calibrate-medium`)")
     gen.add_argument("--quiet", action="store_true", help="no progress lines")
+
+    cal = sub.add_parser("calibrate-medium", help="measure the medium type's noise per task",
+                         description="For each chosen task, search the standard deviation of "
+                                     "the Gaussian noise on the expert's joint values that "
+                                     "makes it succeed in --target-success of its episodes "
+                                     f"(within {medium.TOLERANCE}), measured over --episodes "
+                                     f"episodes from seed {medium.FIRST_SEED:,}; write the "
+                                     "table to --out (extended when it holds the same "
+                                     "calibration settings; saved after each task).")
+    _add_task_selection(cal)
+    cal.add_argument("--out", type=Path, required=True,
+                     help="the table (the suite's own: python/composuite_ros/datasets/"
+                          "medium_noise.json)")
+    cal.add_argument("--target-success", type=_target, default=medium.DEFAULT_TARGET,
+                     help=f"default {medium.DEFAULT_TARGET}")
+    cal.add_argument("--episodes", type=_positive, default=medium.DEFAULT_EPISODES,
+                     help=f"episodes per measurement (default {medium.DEFAULT_EPISODES})")
+    cal.add_argument("--threads", type=_positive, help="threads (default: every core)")
+    cal.add_argument("--quiet", action="store_true", help="no progress lines")
 
     ver = sub.add_parser("verify", help="re-simulate files and compare every row",
                          description="Play every episode of each file again from its seed with "
@@ -131,14 +181,12 @@ def _progress(quiet: bool):
 
 
 def _generate(args) -> int:
-    tasks = select_tasks(args.tasks, robot=args.robot, object=args.object,
-                         obstacle=args.obstacle, objective=args.objective, split=args.split,
-                         split_part=args.split_part)
-    paths = generate(args.out, tasks, args.types, transitions=args.transitions,
+    paths = generate(args.out, _tasks(args), args.types, transitions=args.transitions,
                      first_seed=args.seed, horizon=args.horizon, threads=args.threads,
                      compression=args.compression, overwrite=args.overwrite,
                      resume=args.resume, progress=_progress(args.quiet),
-                     ray_address=args.ray)
+                     ray_address=args.ray, target_success=args.target_success,
+                     medium_table=args.medium_table)
     for path in paths:
         print(path)
     if args.format == "minari":
@@ -147,6 +195,23 @@ def _generate(args) -> int:
             print(f"minari: {to_minari(path)}")
     if not paths:
         print("nothing to write: every file is already there (--resume)", file=sys.stderr)
+    return 0
+
+
+def _calibrate_medium(args) -> int:
+    from .generate import default_threads, suite_provenance
+    tasks = _tasks(args)
+    provenance = {**suite_provenance(),
+                  "command": shlex.join(["composuite-dataset", *sys.argv[1:]])}
+    table = medium.calibrate_table(tasks, args.out, target=args.target_success,
+                                   episodes=args.episodes,
+                                   threads=args.threads or default_threads(),
+                                   provenance=provenance, progress=_progress(args.quiet))
+    for task in tasks:
+        c = table.tasks[str(task.task)]
+        print(f"{task.task}: noise {c.noise:.3g}, success {c.success:.2f} (expert "
+              f"{c.expert_success:.2f}){'' if c.on_target else ', off target'}")
+    print(f"{args.out}: {len(table.tasks)} tasks")
     return 0
 
 
@@ -187,7 +252,10 @@ def _info(args) -> int:
         print(f"{data.path}: {len(data):,} rows, task {data.task.folder if data.task else '?'}, "
               f"{'memory-mapped' if data.mapped else 'compressed'}, {successes:,} success rows")
         if "episode_starts" in data.arrays:
-            print(f"  episodes: {len(data['episode_starts']):,}")
+            starts = data["episode_starts"][:]
+            won = np.maximum.reduceat(data["successes"][:], starts) if len(starts) else starts
+            print(f"  episodes: {len(starts):,}, {np.count_nonzero(won):,} with a success "
+                  f"({np.count_nonzero(won) / max(len(starts), 1):.1%})")
         for key, value in sorted(data.attrs.items()):
             print(f"  {key}: {value}")
     return 0
@@ -196,7 +264,8 @@ def _info(args) -> int:
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        commands = {"generate": _generate, "verify": _verify, "subsample": _subsample,
+        commands = {"generate": _generate, "calibrate-medium": _calibrate_medium,
+                    "verify": _verify, "subsample": _subsample,
                     "from-bag": _from_bag, "info": _info}
         return commands[args.command](args)
     except DatasetError as e:

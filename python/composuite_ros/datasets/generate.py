@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from .. import _native
+from . import medium
 from .layout import GENERATED_TYPES, DatasetError, TaskNames, check_type, task_file
 from .writer import COMPRESSIONS, DatasetWriter
 
@@ -29,17 +30,15 @@ EPISODES_PER_CALL = 32
 # Marks a file this suite wrote (the authors' loader ignores attributes).
 FORMAT = "composuite-ros offline dataset v1"
 
-# Dataset type → the core's policy that plays it.
-_POLICIES = {"random": "random"}
-_NOT_YET = {
-    "expert": "the scripted expert does not act in the reference's 8-number action space yet "
-              "(its stored actions would not replay); see the book's 'Offline datasets'",
-    "medium": "medium is the expert with calibrated action noise, and the expert does not act "
-              "in the reference's action space yet; see the book's 'Offline datasets'",
-    "medium-replay": "medium-replay is what a learner saw on its way to medium; the PPO "
-                     "learner does not write its rollouts yet (see the book's 'Offline "
-                     "datasets')",
+# Why `generate` does not write a known type itself.
+_NOT_GENERATED = {
+    "medium-replay": "medium-replay is what a learner saw on its way to medium: record a PPO "
+                     "run (examples/ppo_train.py --dataset-out RUN.hdf5) and draw it with "
+                     "`composuite-dataset subsample RUN.hdf5`",
 }
+
+_EXPERT = ("the planned expert (nodes/core/src/expert/planned.rs): joint-space plans followed "
+           "with the reference's controller")
 
 
 @dataclass
@@ -54,6 +53,8 @@ class Shard:
     compression: str = "none"
     command: str = ""
     extra_attrs: dict = field(default_factory=dict)
+    target_success: float = medium.DEFAULT_TARGET
+    medium_table: str = str(medium.TABLE)
 
     def path(self, root: str | os.PathLike) -> Path:
         return task_file(root, self.dataset_type, self.task)
@@ -91,13 +92,11 @@ def write_shard(shard: Shard, root: str | os.PathLike, *, threads: int | None = 
                 progress: Callable[[str], None] | None = None) -> Path:
     """Play and write one shard; returns the file's path. The file appears (renamed from its
     temporary name) only when whole."""
-    policy = _POLICIES.get(shard.dataset_type)
-    if policy is None:
-        raise DatasetError(f"cannot generate {shard.dataset_type!r} data: "
-                           f"{_NOT_YET.get(shard.dataset_type, 'unknown type')}")
     threads = threads or default_threads()
-    collector = _native.Collector(str(shard.task.task), policy, first_seed=shard.first_seed,
-                                  threads=threads, horizon=shard.horizon)
+    policy, noise, settings = _policy(shard, threads, progress)
+    collector = _native.Collector(str(shard.task.task), policy, noise=noise,
+                                  first_seed=shard.first_seed, threads=threads,
+                                  horizon=shard.horizon)
     attrs = {
         "format": FORMAT,
         **suite_provenance(),
@@ -105,8 +104,7 @@ def write_shard(shard: Shard, root: str | os.PathLike, *, threads: int | None = 
         "task_reference": "_".join(shard.task.reference),
         "dataset_type": shard.dataset_type,
         "policy": policy,
-        "policy_settings": {"actions": "uniform in [-1, 1] per value, float32",
-                            "rng": "MT19937 keyed by the task index and the episode's seed"},
+        "policy_settings": settings,
         "horizon": shard.horizon,
         "first_seed": shard.first_seed,
         "transitions": shard.transitions,
@@ -127,10 +125,42 @@ def write_shard(shard: Shard, root: str | os.PathLike, *, threads: int | None = 
         return writer.close()
 
 
+def _policy(shard: Shard, threads: int, progress: Callable[[str], None] | None
+            ) -> tuple[str, float, dict]:
+    """The core's policy that plays `shard`'s type, its noise, and the settings the file's
+    attributes record."""
+    if shard.dataset_type == "random":
+        return "random", 0.0, {"actions": "uniform in [-1, 1] per value, float32",
+                               "rng": "MT19937 keyed by the task index and the episode's seed"}
+    if shard.dataset_type == "expert":
+        return "expert", 0.0, {"expert": _EXPERT, "actions": "the reference's 8 numbers, float32",
+                               "noise": 0.0}
+    if shard.dataset_type == "medium":
+        calibration, source = medium.noise_for(shard.task, shard.target_success, shard.horizon,
+                                               table=shard.medium_table, threads=threads,
+                                               progress=progress)
+        return "expert", calibration.noise, {
+            "expert": _EXPERT, "actions": "the reference's 8 numbers, float32",
+            "noise": calibration.noise,
+            "noise_on": "each of the 7 joint values: Gaussian of this standard deviation, then "
+                        "clipped to [-1, 1]; the gripper value is the expert's",
+            "rng": "MT19937 keyed by the task index and the episode's seed",
+            "target_success": calibration.target,
+            "calibrated_success": calibration.success,
+            "expert_success": calibration.expert_success,
+            "calibration_episodes": calibration.episodes,
+            "calibration_first_seed": calibration.first_seed,
+            "calibration_source": source,
+        }
+    raise DatasetError(f"cannot generate {shard.dataset_type!r} data: "
+                       f"{_NOT_GENERATED.get(shard.dataset_type, 'unknown type')}")
+
+
 def plan(root: str | os.PathLike, tasks: Sequence[TaskNames], types: Sequence[str], *,
          transitions: int = DEFAULT_TRANSITIONS, first_seed: int = 0,
          horizon: int = DEFAULT_HORIZON, compression: str = "none", overwrite: bool = False,
-         resume: bool = False, command: str = "") -> list[Shard]:
+         resume: bool = False, command: str = "", target_success: float = medium.DEFAULT_TARGET,
+         medium_table: str | os.PathLike = medium.TABLE) -> list[Shard]:
     """The shards to write, after checking every input (nothing is written here). With
     `resume`, shards whose `data.hdf5` already exists are left out; otherwise an output folder
     that already holds files is refused unless `overwrite`."""
@@ -146,7 +176,13 @@ def plan(root: str | os.PathLike, tasks: Sequence[TaskNames], types: Sequence[st
     for t in types:
         check_type(t)
         if t not in GENERATED_TYPES:
-            raise DatasetError(f"cannot generate {t!r} data: {_NOT_YET[t]}")
+            raise DatasetError(f"cannot generate {t!r} data: {_NOT_GENERATED[t]}")
+    if "medium" in types:
+        medium.check_target(target_success)
+        if Path(medium_table).exists():
+            medium.NoiseTable.load(medium_table)      # refuses a file that is not a table
+        elif Path(medium_table) != medium.TABLE:
+            raise DatasetError(f"medium noise table {medium_table} does not exist")
     if overwrite and resume:
         raise DatasetError("--overwrite and --resume exclude each other: overwrite rewrites "
                            "every file, resume keeps the finished ones")
@@ -156,7 +192,8 @@ def plan(root: str | os.PathLike, tasks: Sequence[TaskNames], types: Sequence[st
     if root.is_dir() and any(root.iterdir()) and not (overwrite or resume):
         raise DatasetError(f"output {root} already holds files; pass --overwrite to replace "
                            "them or --resume to finish the missing ones")
-    shards = [Shard(task, t, transitions, first_seed, horizon, compression, command)
+    shards = [Shard(task, t, transitions, first_seed, horizon, compression, command,
+                    target_success=target_success, medium_table=str(medium_table))
               for t in types for task in tasks]
     if resume:
         shards = [s for s in shards if not s.path(root).exists()]
@@ -168,14 +205,17 @@ def generate(root: str | os.PathLike, tasks: Sequence[TaskNames], types: Sequenc
              horizon: int = DEFAULT_HORIZON, threads: int | None = None,
              compression: str = "none", overwrite: bool = False, resume: bool = False,
              progress: Callable[[str], None] | None = None, command: str | None = None,
-             ray_address: str | None = None) -> list[Path]:
+             ray_address: str | None = None, target_success: float = medium.DEFAULT_TARGET,
+             medium_table: str | os.PathLike = medium.TABLE) -> list[Path]:
     """Write every (task, type) shard under `root`: on this machine one after another, each on
     `threads` threads (default: every core); with `ray_address`, as Ray tasks of `threads` CPUs
-    (default 1) on that cluster. Returns the files written."""
+    (default 1) on that cluster. `medium` files take their noise for `target_success` from
+    `medium_table`, or calibrate it first where the table has none. Returns the files
+    written."""
     command = command if command is not None else shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]])
     shards = plan(root, tasks, types, transitions=transitions, first_seed=first_seed,
                   horizon=horizon, compression=compression, overwrite=overwrite, resume=resume,
-                  command=command)
+                  command=command, target_success=target_success, medium_table=medium_table)
     if ray_address is not None:
         from .cluster import generate_on_ray
         return generate_on_ray(ray_address, root, shards, threads=threads or 1,

@@ -22,9 +22,8 @@ PARTIAL_FILE = "data.hdf5.partial"
 
 # The offline benchmark's dataset types (the folder under the root).
 DATASET_TYPES = ("expert", "medium", "random", "medium-replay")
-# The types `generate` can make today; expert and medium need the expert acting in the
-# reference's action space.
-GENERATED_TYPES = ("random",)
+# The types `generate` plays itself (medium-replay is drawn from a learner's run: `subsample`).
+GENERATED_TYPES = ("expert", "medium", "random")
 
 AXIS_NAMES = tuple(AXES)  # robot, object, obstacle, objective
 

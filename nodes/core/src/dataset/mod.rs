@@ -31,5 +31,5 @@ pub use collector::{
     Chunk, CollectError, Collector, EpisodeStart, Played, play_episode, replay_episode,
     replay_episodes,
 };
-pub use policy::{ActionSource, DatasetPolicy, RandomActions, StoredActions};
+pub use policy::{ActionSource, DatasetPolicy, ExpertActions, RandomActions, StoredActions};
 pub use rows::{ACTION_SIZE, Rows};

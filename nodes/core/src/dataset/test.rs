@@ -162,9 +162,24 @@ fn successes_hold_where_the_reward_is_one() {
 
 #[test]
 fn policies_parse_by_name_and_name_the_valid_ones() {
-    assert_eq!(DatasetPolicy::parse("random"), Ok(DatasetPolicy::Random));
-    let err = DatasetPolicy::parse("expart").unwrap_err();
-    assert!(err.contains("expart") && err.contains("random"), "{err}");
+    assert_eq!(
+        DatasetPolicy::parse("random", 0.0),
+        Ok(DatasetPolicy::Random)
+    );
+    assert_eq!(
+        DatasetPolicy::parse("expert", 0.25),
+        Ok(DatasetPolicy::Expert { noise: 0.25 })
+    );
+    let err = DatasetPolicy::parse("expart", 0.0).unwrap_err();
+    assert!(
+        err.contains("expart") && err.contains("random, expert"),
+        "{err}"
+    );
+    let err = DatasetPolicy::parse("random", 0.5).unwrap_err();
+    assert!(err.contains("takes no noise"), "{err}");
+    let err = DatasetPolicy::parse("expert", -0.1).unwrap_err();
+    assert!(err.contains("-0.1") && err.contains("0 or more"), "{err}");
+    assert!(DatasetPolicy::parse("expert", f64::NAN).is_err());
 }
 
 #[test]
@@ -175,4 +190,47 @@ fn seeds_past_the_references_range_are_refused() {
     let err = collector.collect(1, 100).unwrap_err();
     assert!(matches!(err, CollectError::SeedsExhausted { .. }), "{err}");
     assert!(err.to_string().contains("4294967295"), "{err}");
+}
+
+/// The expert's rows replay to themselves (its actions are the stored `f32` values), and
+/// it solves an easy task with them.
+#[test]
+fn expert_rows_replay_bit_for_bit_and_succeed() {
+    let t = task("IIWA/box/no_obstacle/pick_place");
+    let mut collector = Collector::new(t, config(500), DatasetPolicy::EXPERT, 0, 1).unwrap();
+    let chunk = collector.collect(1, 500).unwrap();
+    assert_eq!(chunk.rows.len(), 500);
+    assert!(chunk.rows.successes.contains(&1), "the expert solves it");
+    let mut env = Env::new(t, config(500));
+    let replayed = replay_episode(&mut env, chunk.episodes[0].seed, &chunk.rows.actions).unwrap();
+    assert_eq!(replayed.rows, chunk.rows);
+    assert_eq!(replayed.final_observation, chunk.final_observations);
+}
+
+/// Noise changes the expert's joint values, keeps them in [−1, 1], leaves its gripper value
+/// alone, depends only on the task and seed, and the rows still replay.
+#[test]
+fn the_noisy_expert_is_seeded_and_replays() {
+    let t = task("Panda/plate/object_wall/shelf");
+    let play = |noise: f64| {
+        Collector::new(t, config(40), DatasetPolicy::Expert { noise }, 3, 1)
+            .unwrap()
+            .collect(1, 40)
+            .unwrap()
+    };
+    let (clean, noisy) = (play(0.0), play(0.5));
+    assert_eq!(noisy, play(0.5), "same task and seed, same noise");
+    assert_ne!(clean.rows.actions, noisy.rows.actions);
+    for b in noisy.rows.actions.chunks(8) {
+        assert!(b.iter().all(|v| (-1.0..=1.0).contains(v)), "{b:?}");
+        assert!(
+            [-1.0, 0.0, 1.0].contains(&b[7]),
+            "the gripper's value is a direction: {b:?}"
+        );
+    }
+    // Both open the gripper from step 0: the noise leaves that value alone.
+    assert_eq!(clean.rows.actions[7], noisy.rows.actions[7]);
+    let mut env = Env::new(t, config(40));
+    let replayed = replay_episode(&mut env, 3, &noisy.rows.actions).unwrap();
+    assert_eq!(replayed.rows, noisy.rows);
 }

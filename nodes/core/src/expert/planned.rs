@@ -206,6 +206,12 @@ impl PlannedExpert {
 
     /// The next action (the reference's 8 numbers) for the environment's current state.
     pub fn act(&mut self, env: &Env) -> Action {
+        Action::Reference(self.reference_action(env))
+    }
+
+    /// [`PlannedExpert::act`]'s 8 numbers: 7 joint-goal offsets in units of 0.05 rad and the
+    /// gripper's direction, each in [−1, 1].
+    pub fn reference_action(&mut self, env: &Env) -> [f64; 8] {
         let world = env.world();
         let (q, v) = (world.arm_positions(), world.arm_velocities());
         let physics = &env.config().physics;
@@ -234,7 +240,7 @@ impl PlannedExpert {
         let mut action = [0.0; 8];
         action[..ARM_DOF].copy_from_slice(&joints);
         action[7] = sign;
-        Action::Reference(action)
+        action
     }
 
     fn start(&mut self, leg: Leg) {
