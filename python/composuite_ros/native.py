@@ -25,10 +25,11 @@ from typing import Any
 
 import gymnasium
 import numpy as np
-from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector import VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from . import _native
+from ._gymnasium import NEXT_STEP_AUTORESET
 from .episode import (ACTION_SIZE, EpisodeSeeds, EpisodeTracker, absolute_action_space,
                       check_action, check_action_mode, observation_space, reference_action_space,
                       vector_seeds)
@@ -211,7 +212,7 @@ class CompoSuiteNativeVectorEnv(VectorEnv):
     terminated = truncated = False, with that reset's info.
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": 20}
+    metadata = {**NEXT_STEP_AUTORESET, "render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, tasks: str | Task | Sequence[str | Task] = DEFAULT_TASK,
                  num_envs: int | None = None, *, threads: int | None = None,

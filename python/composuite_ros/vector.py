@@ -25,9 +25,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector import VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ._gymnasium import NEXT_STEP_AUTORESET
 from ._link import Channel, Participant, attempt_budget
 from .env import (EpisodeSeeds, EpisodeTracker, ObservationDrawer, flat_observation, observation_space,
                   reference_action_space, stamp_ns)
@@ -53,7 +54,7 @@ class CompoSuiteRosVectorEnv(VectorEnv):
     Actions are the reference benchmark's (8 values in [-1, 1] per environment).
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"], "render_fps": 20}
+    metadata = {**NEXT_STEP_AUTORESET, "render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, namespaces: Sequence[str], tasks: str | Task | Sequence[str | Task] | None = None,
                  *, use_task_id_obs: bool = True, domain_id: int | None = None, timeout: float = 10.0,

@@ -43,6 +43,8 @@ def test_expert_files_succeed_and_replay_bit_for_bit(tmp_path):
         assert set(np.unique(actions[:, 7])) <= {-1.0, 0.0, 1.0}
     verdict = datasets.verify(path, threads=2)
     assert verdict.ok, verdict.difference
+    info = cli("info", str(path))
+    assert "episodes: 2, 2 with a success (100.0%)" in info.stdout, info
 
 
 def shipped_table() -> medium.NoiseTable:
@@ -105,6 +107,10 @@ def test_calibrate_medium_writes_and_extends_a_table(tmp_path):
     assert (table.episodes, c.expert_success, c.trials[0]) == (6, 1.0, [0.0, 1.0])
     assert c.noise > 0 and [c.noise, c.success] in c.trials
     assert table.provenance["command"].startswith("composuite-dataset calibrate-medium")
+    # Run again, the table's task is kept, not measured again.
+    again = cli("calibrate-medium", "--tasks", EASY, "--episodes", "6", "--out", str(out))
+    assert again.returncode == 0 and "already in" in again.stderr and "->" not in again.stderr
+    assert medium.NoiseTable.load(out).tasks[EASY] == c
     [path] = datasets.generate(tmp_path / "d", datasets.select_tasks([EASY]), ["medium"],
                                transitions=500, threads=2, command="test",
                                target_success=0.6, medium_table=out)

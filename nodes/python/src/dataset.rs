@@ -90,6 +90,14 @@ impl Collector {
         Ok(dict)
     }
 
+    /// Play `episodes` more episodes only as far as their first successful step: whether each
+    /// succeeded (a list of bools, in seed order), with no rows kept.
+    fn successes(&mut self, py: Python<'_>, episodes: usize) -> PyResult<Vec<bool>> {
+        let inner = &mut self.inner;
+        py.detach(|| inner.successes(episodes))
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+
     /// The seed the next episode starts from (seeds the task cannot start with are skipped).
     #[getter]
     fn next_seed(&self) -> u64 {

@@ -125,7 +125,8 @@ def _parser() -> argparse.ArgumentParser:
                                      f"(within {medium.TOLERANCE}), measured over --episodes "
                                      f"episodes from seed {medium.FIRST_SEED:,}; write the "
                                      "table to --out (extended when it holds the same "
-                                     "calibration settings; saved after each task).")
+                                     "calibration settings, its tasks kept unless --again; "
+                                     "saved after each task).")
     _add_task_selection(cal)
     cal.add_argument("--out", type=Path, required=True,
                      help="the table (the suite's own: python/composuite_ros/datasets/"
@@ -134,6 +135,9 @@ def _parser() -> argparse.ArgumentParser:
                      help=f"default {medium.DEFAULT_TARGET}")
     cal.add_argument("--episodes", type=_positive, default=medium.DEFAULT_EPISODES,
                      help=f"episodes per measurement (default {medium.DEFAULT_EPISODES})")
+    cal.add_argument("--again", action="store_true",
+                     help="calibrate tasks the table already holds again (default: keep them, "
+                          "so an interrupted run goes on where it stopped)")
     cal.add_argument("--threads", type=_positive, help="threads (default: every core)")
     cal.add_argument("--quiet", action="store_true", help="no progress lines")
 
@@ -204,7 +208,7 @@ def _calibrate_medium(args) -> int:
     provenance = {**suite_provenance(),
                   "command": shlex.join(["composuite-dataset", *sys.argv[1:]])}
     table = medium.calibrate_table(tasks, args.out, target=args.target_success,
-                                   episodes=args.episodes,
+                                   episodes=args.episodes, again=args.again,
                                    threads=args.threads or default_threads(),
                                    provenance=provenance, progress=_progress(args.quiet))
     for task in tasks:

@@ -19,8 +19,6 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
-import numpy as np
-
 from .. import _native
 from .layout import DatasetError, TaskNames
 
@@ -63,10 +61,8 @@ def success_rate(task: str, noise: float, *, episodes: int = DEFAULT_EPISODES,
     with) in which the expert with `noise` succeeds at some step."""
     collector = _native.Collector(task, "expert", noise=noise, first_seed=first_seed,
                                   threads=threads, horizon=horizon)
-    chunk = collector.collect(episodes, episodes * horizon)
-    starts = chunk["episode_starts"]
-    wins = np.maximum.reduceat(chunk["successes"], starts) if len(starts) else []
-    return float(np.count_nonzero(wins)) / episodes
+    # Each episode only as far as its first success: what decides it.
+    return sum(collector.successes(episodes)) / episodes
 
 
 def calibrate(task: str, target: float = DEFAULT_TARGET, *, episodes: int = DEFAULT_EPISODES,
@@ -182,10 +178,13 @@ def noise_for(task: TaskNames, target: float, horizon: int, *, table: str | os.P
 
 def calibrate_table(tasks: Sequence[TaskNames], out: str | os.PathLike, *,
                     target: float = DEFAULT_TARGET, episodes: int = DEFAULT_EPISODES,
-                    horizon: int = 500, threads: int = 1, provenance: dict | None = None,
+                    horizon: int = 500, threads: int = 1, again: bool = False,
+                    provenance: dict | None = None,
                     progress: Callable[[str], None] | None = None) -> NoiseTable:
-    """Calibrate `tasks` and write them into the table at `out` (created, or extended where it
-    holds the same target, episode count, seeds and horizon; saved after every task)."""
+    """Calibrate `tasks` into the table at `out`, saved after every task. A table already there
+    for the same target, episode count, seeds and horizon is extended: its tasks are kept (an
+    interrupted run goes on where it stopped) unless `again`; one for other settings is
+    replaced."""
     check_target(target)
     table = NoiseTable(target, episodes, FIRST_SEED, horizon, provenance=provenance)
     if Path(out).exists():
@@ -197,9 +196,13 @@ def calibrate_table(tasks: Sequence[TaskNames], out: str | os.PathLike, *,
             progress(f"{out} holds another calibration (target {old.target}, {old.episodes} "
                      "episodes): replacing it")
     for task in tasks:
-        table.tasks[str(task.task)] = calibrate(str(task.task), target, episodes=episodes,
-                                                threads=threads, horizon=horizon,
-                                                progress=progress)
+        name = str(task.task)
+        if name in table.tasks and not again:
+            if progress:
+                progress(f"medium/{name}: already in {out} (--again calibrates it again)")
+            continue
+        table.tasks[name] = calibrate(name, target, episodes=episodes, threads=threads,
+                                      horizon=horizon, progress=progress)
         table.save(out)
     return table
 

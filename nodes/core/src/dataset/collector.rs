@@ -127,7 +127,7 @@ impl Collector {
             let seeds = self.take_seeds(round)?;
             let budget = max_rows - chunk.rows.len();
             let (task, policy) = (self.task, self.policy);
-            let mut slots: Vec<Slot<'_>> = self
+            let mut slots: Vec<Slot<'_, Played>> = self
                 .envs
                 .iter_mut()
                 .zip(&seeds)
@@ -164,6 +164,36 @@ impl Collector {
         Ok(chunk)
     }
 
+    /// Play `episodes` more episodes only as far as their first successful step (or their end,
+    /// without one): whether each succeeded, in seed order, with no rows kept. The same seeds
+    /// and actions as [`Collector::collect`] would play, so an episode succeeds here exactly
+    /// where its rows would hold a success; a calibration counting successes needs no more.
+    pub fn successes(&mut self, episodes: usize) -> Result<Vec<bool>, CollectError> {
+        let mut won = Vec::with_capacity(episodes);
+        while won.len() < episodes {
+            let seeds = self.take_seeds((episodes - won.len()).min(self.envs.len()))?;
+            let (task, policy) = (self.task, self.policy);
+            let mut slots: Vec<Slot<'_, bool>> = self
+                .envs
+                .iter_mut()
+                .zip(&seeds)
+                .map(|(env, &seed)| (env, seed, None))
+                .collect();
+            self.pool.for_each(&mut slots, |_, (env, seed, succeeded)| {
+                let mut source = policy.source(task, *seed);
+                *succeeded = Some(play_until_success(env, *seed, source.as_mut()));
+            });
+            for (_, seed, succeeded) in slots {
+                won.push(
+                    succeeded
+                        .expect("every slot is played")
+                        .map_err(|error| CollectError::Env { seed, error })?,
+                );
+            }
+        }
+        Ok(won)
+    }
+
     /// The next `n` seeds the task can start with.
     fn take_seeds(&mut self, n: usize) -> Result<Vec<u64>, CollectError> {
         let mut seeds = Vec::with_capacity(n);
@@ -181,7 +211,7 @@ impl Collector {
 }
 
 /// One episode of a round: the environment that plays it, its seed, and what it gave.
-type Slot<'a> = (&'a mut Env, u64, Option<Result<Played, EnvError>>);
+type Slot<'a, T> = (&'a mut Env, u64, Option<Result<T, EnvError>>);
 
 /// The first `n` rows of an episode, the last flagged a timeout unless the episode ended there,
 /// and the observation after row `n − 1`'s step (row `n`'s observation).
@@ -240,6 +270,26 @@ pub fn play_episode(
         rows,
         final_observation: observation.iter().map(|&v| v as f32).collect(),
     })
+}
+
+/// Play an episode of `env`'s task from `seed` with `source`'s actions until a step succeeds
+/// (true) or the episode ends (false).
+fn play_until_success(
+    env: &mut Env,
+    seed: u64,
+    source: &mut dyn ActionSource,
+) -> Result<bool, EnvError> {
+    env.reset(seed)?;
+    loop {
+        let action = source.action(env);
+        let step = env.step(&Action::Reference(action.map(f64::from)))?;
+        if step.info.success {
+            return Ok(true);
+        }
+        if step.terminated || step.truncated {
+            return Ok(false);
+        }
+    }
 }
 
 /// Play a stored episode again: `env`'s task from `seed`, stepped with `actions` (rows of 8).

@@ -234,3 +234,28 @@ fn the_noisy_expert_is_seeded_and_replays() {
     let replayed = replay_episode(&mut env, 3, &noisy.rows.actions).unwrap();
     assert_eq!(replayed.rows, noisy.rows);
 }
+
+/// `successes` says, episode by episode, whether the rows `collect` gives for the same seeds
+/// hold a success.
+#[test]
+fn successes_agree_with_the_collected_rows() {
+    let t = task("IIWA/box/no_obstacle/push");
+    let collector = || Collector::new(t, config(500), DatasetPolicy::Expert { noise: 1.2 }, 7, 2);
+    let chunk = collector().unwrap().collect(6, 6 * 500).unwrap();
+    let from_rows: Vec<bool> = (0..6)
+        .map(|i| {
+            let end = chunk
+                .episodes
+                .get(i + 1)
+                .map_or(chunk.rows.len(), |e| e.row);
+            chunk.rows.successes[chunk.episodes[i].row..end].contains(&1)
+        })
+        .collect();
+    let mut c = collector().unwrap();
+    assert_eq!(c.successes(6).unwrap(), from_rows);
+    assert!(
+        from_rows.contains(&true) && from_rows.contains(&false),
+        "{from_rows:?}"
+    );
+    assert_eq!(c.next_seed(), chunk.episodes[5].seed + 1);
+}
