@@ -16,6 +16,7 @@ mod launch;
 mod play;
 mod plots;
 mod replay;
+mod security;
 mod session;
 mod tasks;
 mod topics;
@@ -41,6 +42,7 @@ enum Command {
     Demo(demo::DemoArgs),
     Session(session::SessionArgs),
     Bag(bag::BagArgs),
+    Security(security::SecurityArgs),
     /// Run one node of the suite (what `launch` starts): `composuite node sim --ros-args ...`.
     #[command(hide = true, disable_help_flag = true)]
     Node {
@@ -73,6 +75,7 @@ fn main() -> std::process::ExitCode {
         Command::Launch(args) => launch::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Bag(args) => bag::run(&args),
+        Command::Security(args) => security::run(&args),
         Command::Session(args) => session::run(&args),
         Command::Tasks(args) => tasks::run(&args),
         Command::Bench(args) => bench::run(&args),
