@@ -127,7 +127,8 @@ impl Container {
         let step_pool = StepPool::new(threads).map_err(|e| format!("--threads {threads}: {e}"))?;
         let ros_environment =
             RosEnvironment::read(|k| std::env::var(k).ok()).map_err(|e| e.to_string())?;
-        let context = new_context(&ros_environment).map_err(|e| e.to_string())?;
+        // The composed nodes share one participant, so one enclave (the override, else `/`).
+        let context = new_context(&ros_environment, None).map_err(|e| e.to_string())?;
         let (ended_tx, ended_rx) = mpsc::channel();
         let mut container = Container {
             composition: Composition {

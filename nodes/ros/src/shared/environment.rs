@@ -21,6 +21,22 @@ pub struct RosEnvironment {
     pub domain_id: u16,
     /// Discovery range.
     pub discovery_range: DiscoveryRange,
+    /// DDS-Security, as rcl reads it.
+    pub security: SecurityEnvironment,
+}
+
+/// rcl's security switches, read as rcl reads them: each is on only at its exact value.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct SecurityEnvironment {
+    /// `ROS_SECURITY_ENABLE` is exactly `true`.
+    pub enable: bool,
+    /// `ROS_SECURITY_STRATEGY` is exactly `Enforce` (anything else: permissive — run without
+    /// security where its files are missing).
+    pub enforce: bool,
+    /// `ROS_SECURITY_KEYSTORE` (unset or empty: none).
+    pub keystore: Option<String>,
+    /// `ROS_SECURITY_ENCLAVE_OVERRIDE`: the enclave, whatever `--enclave` says.
+    pub enclave_override: Option<String>,
 }
 
 /// An environment variable with a value ROS would refuse.
@@ -73,9 +89,17 @@ impl RosEnvironment {
             }
             None => DiscoveryRange::Subnet,
         };
+        let non_empty = |key: &str| get(key).filter(|v| !v.is_empty());
+        let security = SecurityEnvironment {
+            enable: get("ROS_SECURITY_ENABLE").as_deref() == Some("true"),
+            enforce: get("ROS_SECURITY_STRATEGY").as_deref() == Some("Enforce"),
+            keystore: non_empty("ROS_SECURITY_KEYSTORE"),
+            enclave_override: non_empty("ROS_SECURITY_ENCLAVE_OVERRIDE"),
+        };
         Ok(RosEnvironment {
             domain_id,
             discovery_range,
+            security,
         })
     }
 }

@@ -6,7 +6,8 @@
 //! - [`names`]: the topic and service names, relative so a namespace can hold one environment;
 //! - [`ros_args`]: the `--ros-args` command line every ROS 2 node accepts;
 //! - [`qos`]: the QoS profile of each kind of topic;
-//! - [`environment`]: `ROS_DOMAIN_ID` and the discovery range, which ros2-client does not read;
+//! - [`environment`]: `ROS_DOMAIN_ID`, the discovery range and the security switches, which
+//!   ros2-client does not read; [`security`]: which enclave's files a participant joins with;
 //! - [`node`], [`params`] and [`param_server`]: start-up, parameters and their services,
 //!   logging, signals;
 //! - [`dds_log`]: RustDDS's log output, quietened where it reports expected events;
@@ -23,3 +24,4 @@ pub mod param_server;
 pub mod params;
 pub mod qos;
 pub mod ros_args;
+pub mod security;

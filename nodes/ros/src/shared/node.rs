@@ -13,6 +13,7 @@ use composuite_core::batch::StepPool;
 use composuite_msgs::{RosMessage, RosService};
 use ros2_client::action::ActionServerQosPolicies;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::dds::rustdds::DomainParticipantSecurityConfigFiles;
 use ros2_client::dds::rustdds::{Topic, TopicDescription};
 use ros2_client::dds::{ActionServer, Context, Node, NodeLoggingHandle, Server, ServiceMapping};
 use ros2_client::log::LogLevel;
@@ -28,6 +29,7 @@ use crate::shared::intra_process::{IntraProcess, Publisher, Subscription};
 use crate::shared::param_server::{ParameterServices, Parameters};
 use crate::shared::params::{self, ParamSpec};
 use crate::shared::ros_args::{self, RosArgs};
+use crate::shared::security;
 
 /// Log severities, ordered (rcutils' levels).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -363,7 +365,7 @@ impl RosNode {
 
         let context = match shared {
             Some(composition) => composition.context.clone(),
-            None => new_context(&environment)?,
+            None => new_context(&environment, args.enclave.as_deref())?,
         };
 
         // No ros2-client spinner (see param_server): parameters are served by our own thread.
@@ -672,15 +674,31 @@ pub fn shutdown_signal() -> std::io::Result<async_channel::Receiver<i32>> {
     Ok(rx)
 }
 
-/// A ROS context on a new DDS participant, as `environment` asks (domain, discovery range),
-/// with RustDDS's own log records at the level `COMPOSUITE_DDS_LOG` sets.
-pub fn new_context(environment: &RosEnvironment) -> Result<Context, StartError> {
+/// A ROS context on a new DDS participant, as `environment` asks (domain, discovery range,
+/// DDS-Security with the files of the enclave rcl's switches and `enclave` choose), with
+/// RustDDS's own log records at the level `COMPOSUITE_DDS_LOG` sets.
+pub fn new_context(
+    environment: &RosEnvironment,
+    enclave: Option<&str>,
+) -> Result<Context, StartError> {
     let dds_level = dds_log::parse_level(std::env::var(dds_log::DDS_LOG_VAR).ok().as_deref())
         .map_err(StartError)?;
     dds_log::install(dds_level);
     let mut builder = DomainParticipantBuilder::new(environment.domain_id);
     if environment.discovery_range != DiscoveryRange::Subnet {
         builder = builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
+    }
+    match security::decide(&environment.security, enclave).map_err(StartError)? {
+        security::Join::Plain { warning: None } => {}
+        security::Join::Plain {
+            warning: Some(warning),
+        } => eprintln!("[WARN] security: {warning}"),
+        security::Join::Secure { dir, .. } => {
+            // The plugins take unencrypted keys only: no password.
+            let files =
+                DomainParticipantSecurityConfigFiles::with_ros_default_names(dir, String::new());
+            builder = builder.builtin_security(files);
+        }
     }
     let participant = builder
         .build()

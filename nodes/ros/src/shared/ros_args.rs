@@ -72,6 +72,8 @@ pub struct RosArgs {
     pub params_files: Vec<PathBuf>,
     /// `--log-level LEVEL`.
     pub log_level: Option<String>,
+    /// `-e/--enclave NAME`: the security enclave (default `/`).
+    pub enclave: Option<String>,
     /// The program's own arguments (outside the sections).
     pub other: Vec<String>,
 }
@@ -198,7 +200,13 @@ pub fn parse(args: &[String]) -> Result<RosArgs, RosArgsError> {
                 out.log_level = Some(level);
             }
             "-e" | "--enclave" => {
-                value(arg)?; // security enclaves: accepted, not used (no DDS security here)
+                let enclave = value(arg)?;
+                if !is_valid_name(&enclave, true) || !enclave.starts_with('/') {
+                    return Err(RosArgsError(format!(
+                        "enclave `{enclave}` is not a fully qualified name such as /composuite/sim"
+                    )));
+                }
+                out.enclave = Some(enclave);
             }
             other => {
                 return Err(RosArgsError(format!(

@@ -770,11 +770,8 @@ impl CryptoTransform for CryptographicBuiltin {
     // or
     // CryptoHeader + CryptoContent + CryptoFooter
     //
-    // We can detect which one it is from CryptoHeader contents.
-    // splitting to the three parts has to be done by byte offset, because
-    // SerializedPayload does not have a length marker, but both header and footer
-    // have a fixed length. Footer is not allowed to have receiver specific MACs
-    // here, which makes its size fixed.
+    // We can detect which one it is from CryptoHeader contents. The header has a fixed
+    // length; where the content ends depends on the kind (see split_encoded_payload).
 
     let head_len = BuiltinCryptoHeader::serialized_len();
     let foot_len = BuiltinCryptoFooter::minimal_serialized_len();
@@ -785,10 +782,8 @@ impl CryptoTransform for CryptographicBuiltin {
       return Err(security_error("Encoded payload smaller than minimum size"));
     }
     let (header_bytes, content_and_footer_bytes) = encoded_buffer.split_at(head_len);
-    let (content_bytes, footer_bytes) =
-      content_and_footer_bytes.split_at(content_and_footer_bytes.len() - foot_len);
 
-    // Deserialize crypto header and footer
+    // Deserialize crypto header
 
     // .read_from_buffer() does not need endianness, because BuiltinCryptoHeader
     // only contains byte-oriented data, which is insensitive to endianness.
@@ -802,8 +797,6 @@ impl CryptoTransform for CryptographicBuiltin {
         },
       builtin_crypto_header_extra: BuiltinCryptoHeaderExtra(initialization_vector),
     } = crypto_header.try_into()?;
-
-    let BuiltinCryptoFooter { common_mac, .. } = BuiltinCryptoFooter::try_from(footer_bytes)?;
 
     // Get the payload decode key material
     let decode_key_material = self.session_decode_crypto_materials(
@@ -825,6 +818,12 @@ impl CryptoTransform for CryptographicBuiltin {
     }
 
     let decode_key = &decode_key_material.session_key;
+    let encrypted = matches!(
+      transformation_kind,
+      BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES128_GCM
+        | BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES256_GCM
+    );
+    let splits = split_encoded_payload(content_and_footer_bytes, encrypted)?;
 
     match transformation_kind {
       BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_NONE => {
@@ -835,15 +834,106 @@ impl CryptoTransform for CryptographicBuiltin {
       }
       BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES128_GMAC
       | BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES256_GMAC => {
-        validate_mac(decode_key, initialization_vector, content_bytes, common_mac)
-          // if validate_mac succeeds, then map result to content bytes
-          .map(|()| Vec::from(content_bytes))
+        // The signed payload carries no length: the first split whose MAC checks out.
+        let mut result = Err(security_error("Encoded payload has no valid split"));
+        for (content_bytes, footer_bytes) in splits {
+          let BuiltinCryptoFooter { common_mac, .. } =
+            BuiltinCryptoFooter::try_from(footer_bytes)?;
+          result = validate_mac(decode_key, initialization_vector, content_bytes, common_mac)
+            // if validate_mac succeeds, then map result to content bytes
+            .map(|()| Vec::from(content_bytes));
+          if result.is_ok() {
+            break;
+          }
+        }
+        result
       }
       BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES128_GCM
       | BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES256_GCM => {
+        let (content_bytes, footer_bytes) = splits[0];
+        let BuiltinCryptoFooter { common_mac, .. } = BuiltinCryptoFooter::try_from(footer_bytes)?;
         let ciphertext = CryptoContent::read_from_buffer(content_bytes)?.data;
         decrypt(decode_key, initialization_vector, &ciphertext, common_mac)
       }
     }
+  }
+}
+
+/// Where an encoded serialized payload's content ends and its footer (which has no receiver
+/// specific MACs, so a fixed length) begins, in the bytes after the header: the candidate
+/// (content, footer) splits. A DATA submessage's serialized payload runs to the end of the
+/// submessage, which is padded to a multiple of 4 bytes, so up to 3 padding bytes may follow
+/// the footer. Encrypted content (CryptoContent) starts with its own length (big-endian), so
+/// there is one split; signed-only content is the plain serialized payload, whose length is
+/// not written, so the splits are the footer at the end and then 1 to 3 bytes before it
+/// (the MAC tells which one is right).
+fn split_encoded_payload(
+  content_and_footer: &[u8],
+  encrypted: bool,
+) -> SecurityResult<Vec<(&[u8], &[u8])>> {
+  let foot_len = BuiltinCryptoFooter::minimal_serialized_len();
+  if encrypted {
+    let length_bytes: [u8; 4] = content_and_footer
+      .get(..4)
+      .and_then(|b| b.try_into().ok())
+      .ok_or_else(|| security_error("Encoded payload too short for its content length"))?;
+    let content_len = 4 + u32::from_be_bytes(length_bytes) as usize;
+    if content_and_footer.len() < content_len + foot_len {
+      return Err(security_error(
+        "Encoded payload shorter than its content length and footer",
+      ));
+    }
+    let (content, rest) = content_and_footer.split_at(content_len);
+    return Ok(vec![(content, &rest[..foot_len])]);
+  }
+  let last = content_and_footer.len() - foot_len;
+  Ok(
+    (0..=3)
+      .take_while(|pad| *pad <= last)
+      .map(|pad| {
+        let end = content_and_footer.len() - pad;
+        (
+          &content_and_footer[..end - foot_len],
+          &content_and_footer[end - foot_len..end],
+        )
+      })
+      .collect(),
+  )
+}
+
+#[cfg(test)]
+mod split_tests {
+  use super::*;
+
+  #[test]
+  fn encrypted_content_ends_where_its_length_says_whatever_padding_follows() {
+    let foot_len = BuiltinCryptoFooter::minimal_serialized_len();
+    let footer: Vec<u8> = (0..foot_len as u8).collect();
+    for ciphertext_len in [5_usize, 6, 7, 8] {
+      let mut bytes = (ciphertext_len as u32).to_be_bytes().to_vec();
+      bytes.extend(std::iter::repeat(0xAB).take(ciphertext_len));
+      bytes.extend(&footer);
+      // The submessage's padding to a multiple of 4.
+      while bytes.len() % 4 != 0 {
+        bytes.push(0);
+      }
+      let splits = split_encoded_payload(&bytes, true).unwrap();
+      assert_eq!(splits.len(), 1);
+      assert_eq!(splits[0].0.len(), 4 + ciphertext_len);
+      assert_eq!(splits[0].1, &footer[..]);
+    }
+    assert!(split_encoded_payload(&[0, 0, 0, 9, 1, 2], true).is_err());
+  }
+
+  #[test]
+  fn signed_content_is_tried_with_the_footer_at_the_end_and_up_to_3_bytes_before() {
+    let foot_len = BuiltinCryptoFooter::minimal_serialized_len();
+    let bytes = vec![7_u8; 10 + foot_len + 2];
+    let splits = split_encoded_payload(&bytes, false).unwrap();
+    let lengths: Vec<(usize, usize)> = splits.iter().map(|(c, f)| (c.len(), f.len())).collect();
+    assert_eq!(
+      lengths,
+      [(12, foot_len), (11, foot_len), (10, foot_len), (9, foot_len)]
+    );
   }
 }
