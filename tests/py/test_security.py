@@ -29,7 +29,11 @@ def keystore(tmp_path_factory, domain):
     """A keystore whose governance and `/` enclave's permissions cover this module's domain
     (the documents name their domains: another one is refused, as DDS-Security requires)."""
     ks = tmp_path_factory.mktemp("sros2") / "keystore"
-    for args in (["create-keystore", str(ks)], ["create-enclave", str(ks), "/"]):
+    # /observer may call services and read everything, and publish no ROS topic but the log.
+    observer = ["--allow-publish", "rq/*", "rr/*", "rt/rosout", "rt/parameter_events",
+                "--allow-subscribe", "*"]
+    for args in (["create-keystore", str(ks)], ["create-enclave", str(ks), "/"],
+                 ["create-enclave", str(ks), "/observer", *observer]):
         subprocess.run([str(COMPOSUITE), "security", *args, "--domain-id", str(domain)],
                        check=True, capture_output=True)
     return ks
@@ -54,6 +58,20 @@ def test_a_secured_suite_plays_an_episode_bit_for_bit(keystore, domain):
     assert done.returncode == 0, done.stderr[-3000:]
     episode = json.loads(done.stdout.splitlines()[-1])
     assert episode["identical_to_in_process"] and episode["success"], episode
+
+
+def test_an_enclave_without_joint_command_cannot_command_the_sim(keystore, domain):
+    """The same demo, its agent in an enclave whose permissions grant no rt/ publication: its
+    joint_command writer is refused when it is created, and the demo stops saying so."""
+    done = subprocess.run([str(COMPOSUITE), "demo", "--episodes", "1", "--json",
+                           "--agent-enclave", "/observer"],
+                          env=switches(keystore, domain), capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 2, done.stdout
+    assert ("publisher joint_command" in done.stderr
+            and "Not allowed to create a DataWriter to topic rt/demo_" in done.stderr), \
+        done.stderr[-3000:]
+    assert done.stdout == ""
 
 
 def test_enforce_stops_a_node_whose_enclave_is_missing_and_permissive_warns(keystore, domain,

@@ -34,6 +34,14 @@ pub struct DemoArgs {
     /// Print one JSON object per episode instead of text.
     #[arg(long)]
     json: bool,
+    /// The suite's security enclave (with ROS_SECURITY_ENABLE=true; see `composuite security`).
+    /// [default: /]
+    #[arg(long, value_name = "NAME")]
+    enclave: Option<String>,
+    /// The agent's security enclave (e.g. one whose permissions allow less than the suite's).
+    /// [default: /]
+    #[arg(long, value_name = "NAME")]
+    agent_enclave: Option<String>,
 }
 
 /// Play the episodes; an error if the suite fails or differs from the in-process environment.
@@ -48,7 +56,9 @@ pub fn run(args: &DemoArgs) -> Result<(), String> {
     let namespace = format!("/demo_{}", std::process::id());
     let signals = composuite_ros::shared::node::shutdown_signal()
         .map_err(|e| format!("cannot watch for SIGINT/SIGTERM: {e}"))?;
-    let mut suite = Suite::start(&LaunchArgs::one_environment(&args.task, &namespace, "warn"))?;
+    let launch = LaunchArgs::one_environment(&args.task, &namespace, "warn")
+        .with_enclave(args.enclave.clone());
+    let mut suite = Suite::start(&launch)?;
     let plan = Plan {
         namespace,
         tasks: vec![task],
@@ -57,6 +67,7 @@ pub fn run(args: &DemoArgs) -> Result<(), String> {
         policy: PolicyKind::Expert,
         wait_for_recorder: false,
         signals: Some(signals),
+        enclave: args.agent_enclave.clone(),
     };
     let result = drive(&plan, &mut suite, |o| report(o, args.json));
     let clean = suite.stop();

@@ -133,6 +133,8 @@ pub struct Plan {
     pub wait_for_recorder: bool,
     /// SIGINT/SIGTERM as they arrive (`shutdown_signal`); `None` lets a signal end the process.
     pub signals: Option<async_channel::Receiver<i32>>,
+    /// The agent's security enclave (`--ros-args --enclave`; None: `/`).
+    pub enclave: Option<String>,
 }
 
 /// What a drive played.
@@ -201,10 +203,13 @@ pub fn drive(
     suite: &mut Suite,
     mut each: impl FnMut(&EpisodeOutcome),
 ) -> Result<Driven, String> {
-    let argv: Vec<String> = ["--ros-args", "-r", &format!("__ns:={}", plan.namespace)]
+    let mut argv: Vec<String> = ["--ros-args", "-r", &format!("__ns:={}", plan.namespace)]
         .iter()
         .map(|s| s.to_string())
         .collect();
+    if let Some(enclave) = &plan.enclave {
+        argv.extend(["--enclave".to_string(), enclave.clone()]);
+    }
     let mut node = match RosNode::start(&AGENT, &argv).map_err(|e| e.to_string())? {
         Startup::Node(node) => node,
         Startup::Help(_) => unreachable!("no --help given"),

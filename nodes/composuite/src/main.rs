@@ -38,7 +38,7 @@ enum Command {
     Tasks(tasks::TasksArgs),
     Bench(bench::BenchArgs),
     Expert(expert::ExpertArgs),
-    Launch(launch::LaunchArgs),
+    Launch(Box<launch::LaunchArgs>),
     Demo(demo::DemoArgs),
     Session(session::SessionArgs),
     Bag(bag::BagArgs),

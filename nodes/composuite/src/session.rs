@@ -170,6 +170,7 @@ pub fn run(args: &SessionArgs) -> Result<(), String> {
         policy,
         wait_for_recorder: !args.no_record,
         signals: Some(signals),
+        enclave: None,
     };
     let progress = Progress::new(total);
     let result = drive(&plan, &mut suite, |o| progress.episode(o));

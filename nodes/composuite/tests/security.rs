@@ -213,6 +213,61 @@ fn openssl_accepts_what_the_ca_signed_and_nothing_else() {
 }
 
 #[test]
+fn an_enclave_can_be_granted_exactly_its_topics() {
+    let ks = scratch("grant").join("keystore");
+    assert!(
+        composuite(&["security", "create-keystore", path(&ks)])
+            .status
+            .success()
+    );
+    let out = composuite(&[
+        "security",
+        "create-enclave",
+        path(&ks),
+        "/agent",
+        "--allow-publish",
+        "rt/env_00/reference_action",
+        "rq/env_00/*",
+        "--allow-subscribe",
+        "rt/env_00/*",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let xml = fs::read_to_string(ks.join("enclaves/agent/permissions.xml")).unwrap();
+    let publish = &xml[xml.find("<publish>").unwrap()..xml.find("</publish>").unwrap()];
+    let subscribe = &xml[xml.find("<subscribe>").unwrap()..xml.find("</subscribe>").unwrap()];
+    for topic in [
+        "rt/env_00/reference_action",
+        "rq/env_00/*",
+        "ros_discovery_info",
+    ] {
+        assert!(
+            publish.contains(&format!("<topic>{topic}</topic>")),
+            "{publish}"
+        );
+    }
+    assert!(!publish.contains("rt/*") && !publish.contains("rt/env_00/*"));
+    assert!(
+        subscribe.contains("<topic>rt/env_00/*</topic>"),
+        "{subscribe}"
+    );
+    // One list without the other is refused by the command line.
+    let out = composuite(&[
+        "security",
+        "create-enclave",
+        path(&ks),
+        "/b",
+        "--allow-publish",
+        "x",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("--allow-subscribe"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
 fn bad_input_is_refused_saying_what_is_valid() {
     let root = scratch("bad");
     let ks = root.join("keystore");

@@ -118,6 +118,9 @@ pub(super) fn node_arguments(
         }
     }
     out.extend(["--log-level".into(), args.log_level.clone()]);
+    if let Some(enclave) = &args.enclave {
+        out.extend(["--enclave".into(), enclave.clone()]);
+    }
     out
 }
 
@@ -156,6 +159,7 @@ impl LaunchArgs {
             self.reward_scale.map(|r| format!("{r:?}")),
         );
         option("--service-mapping", self.service_mapping.clone());
+        option("--enclave", self.enclave.clone());
         option(
             "--params-file",
             self.params_file.as_ref().map(|f| f.display().to_string()),
@@ -225,7 +229,14 @@ mod tests {
             "0.25",
             "--duration",
             "9",
+            "--enclave",
+            "/composuite/train",
         ]);
+        let sim = node_arguments(&parent, NodeKind::Sim, "/train/env_00", 0);
+        assert!(
+            sim.windows(2)
+                .any(|w| w == ["--enclave", "/composuite/train"])
+        );
         for range in split_environments(parent.envs, parent.processes) {
             let argv = parent.container_process_argv(&range);
             assert_eq!(argv[0], "launch");
@@ -235,6 +246,7 @@ mod tests {
             assert!(child.composed() && child.processes == 1 && child.duration.is_none());
             assert_eq!((child.respawn, child.respawn_delay), (4, 0.25));
             assert_eq!(child.step_threads(), 3);
+            assert_eq!(child.enclave.as_deref(), Some("/composuite/train"));
             for index in range {
                 let namespace = env_namespace("/train", index, 5);
                 for kind in NodeKind::ALL {

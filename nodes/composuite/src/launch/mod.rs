@@ -101,6 +101,12 @@ pub struct LaunchArgs {
     /// Log level of the nodes: debug, info, warn, error, fatal.
     #[arg(long, default_value = "info")]
     log_level: String,
+    /// The security enclave of every node (with ROS_SECURITY_ENABLE=true; see `composuite
+    /// security`): each node gets `--ros-args --enclave NAME`, and a composed process, one DDS
+    /// participant for all its nodes, joins as NAME. ROS_SECURITY_ENCLAVE_OVERRIDE still wins.
+    /// [default: /]
+    #[arg(long, value_name = "NAME")]
+    enclave: Option<String>,
     /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
     #[arg(long)]
     duration: Option<f64>,
@@ -163,6 +169,12 @@ impl LaunchArgs {
     }
 
     /// One lockstep environment of `task` in `namespace`, everything else at its default.
+    /// The same, its nodes in security enclave `enclave` (None: `/`).
+    pub(crate) fn with_enclave(mut self, enclave: Option<String>) -> LaunchArgs {
+        self.enclave = enclave;
+        self
+    }
+
     pub(crate) fn one_environment(task: &str, namespace: &str, log_level: &str) -> LaunchArgs {
         LaunchArgs {
             task: Some(task.into()),
@@ -181,6 +193,7 @@ impl LaunchArgs {
             auto_reset: false,
             params_file: None,
             log_level: log_level.into(),
+            enclave: None,
             duration: None,
             respawn: 0,
             respawn_delay: 1.0,

@@ -72,7 +72,12 @@ impl Suite {
                 limit: args.respawn,
                 delay: Duration::from_secs_f64(args.respawn_delay),
             };
-            match Container::start(environments, policy, args.step_threads()) {
+            match Container::start(
+                environments,
+                policy,
+                args.step_threads(),
+                args.enclave.as_deref(),
+            ) {
                 Ok(container) => suite.container = Some(container),
                 Err(e) => {
                     stop_all(&mut suite.nodes);

@@ -30,6 +30,13 @@ pub(super) fn validate(args: &LaunchArgs) -> Result<(), String> {
             args.namespace
         ));
     }
+    if let Some(enclave) = &args.enclave
+        && !(enclave.starts_with('/') && is_valid_name(enclave, true))
+    {
+        return Err(format!(
+            "--enclave {enclave} is invalid; it must be a fully qualified name, e.g. /composuite/sim"
+        ));
+    }
     if !(1..=100).contains(&args.envs) {
         return Err(format!("--envs {} is invalid; valid: 1 to 100", args.envs));
     }

@@ -63,6 +63,24 @@ impl Grant {
     }
 }
 
+impl Grant {
+    /// Exactly these topics, and the graph's `ros_discovery_info` both ways (every ROS 2
+    /// participant publishes and reads it).
+    pub fn of(publish: &[String], subscribe: &[String]) -> Grant {
+        let with_discovery = |topics: &[String]| {
+            let mut all = topics.to_vec();
+            if !all.iter().any(|t| t == "ros_discovery_info") {
+                all.push("ros_discovery_info".into());
+            }
+            all
+        };
+        Grant {
+            publish: with_discovery(publish),
+            subscribe: with_discovery(subscribe),
+        }
+    }
+}
+
 /// The XML-escaped form of `text` (enclave names and topics are plain ROS names; this keeps a
 /// stray `&` or `<` from breaking the document).
 fn escape(text: &str) -> String {

@@ -68,6 +68,14 @@ enum SecurityCommand {
         /// How long the certificate and the permissions are valid.
         #[arg(long, default_value_t = 3650)]
         days: u32,
+        /// Instead of the default grant: the DDS topics it may publish (wildcards * and ?; ROS
+        /// topic /ns/name is rt/ns/name, a service's request rq/ns/nameRequest and its reply
+        /// rr/ns/nameReply). ros_discovery_info is always allowed.
+        #[arg(long, num_args = 1.., value_name = "TOPIC", requires = "allow_subscribe")]
+        allow_publish: Vec<String>,
+        /// With --allow-publish: the DDS topics it may subscribe to.
+        #[arg(long, num_args = 1.., value_name = "TOPIC", requires = "allow_publish")]
+        allow_subscribe: Vec<String>,
     },
     /// List the keystore's enclaves, one per line.
     ListEnclaves {
@@ -100,8 +108,15 @@ pub fn run(args: &SecurityArgs) -> Result<(), String> {
             enclave,
             domain_id,
             days,
+            allow_publish,
+            allow_subscribe,
         } => {
-            let dir = create_enclave(keystore, enclave, domain(*domain_id)?, *days)?;
+            let grant = if allow_publish.is_empty() {
+                Grant::ros_default()
+            } else {
+                Grant::of(allow_publish, allow_subscribe)
+            };
+            let dir = create_enclave(keystore, enclave, domain(*domain_id)?, *days, &grant)?;
             println!("created enclave {enclave} in {}", dir.display());
             Ok(())
         }
@@ -252,12 +267,13 @@ pub fn enclave_dir(keystore: &Path, enclave: &str) -> PathBuf {
         .join(enclave.trim_start_matches('/'))
 }
 
-/// Make `enclave` in `keystore`; returns its folder.
+/// Make `enclave` in `keystore` with the permissions `grant`; returns its folder.
 pub fn create_enclave(
     keystore: &Path,
     enclave: &str,
     domain: u32,
     days: u32,
+    grant: &Grant,
 ) -> Result<PathBuf, String> {
     if !valid_enclave(enclave) {
         return Err(format!(
@@ -307,7 +323,7 @@ pub fn create_enclave(
         domain,
         &stamp(validity.not_before),
         &stamp(validity.not_after),
-        &Grant::ros_default(),
+        grant,
     );
     let signed = ca
         .sign(permissions.as_bytes())

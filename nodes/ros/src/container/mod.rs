@@ -112,12 +112,14 @@ pub struct Container {
 }
 
 impl Container {
-    /// Start every environment's nodes on one new participant (domain and discovery range from
-    /// the process environment, as for any node), their physics stepped by `threads` threads.
+    /// Start every environment's nodes on one new participant (domain, discovery range and
+    /// security from the process environment, as for any node; `enclave` as a node's
+    /// `--enclave`), their physics stepped by `threads` threads.
     pub fn start(
         environments: Vec<EnvironmentLaunch>,
         policy: RespawnPolicy,
         threads: usize,
+        enclave: Option<&str>,
     ) -> Result<Container, String> {
         if threads == 0 {
             return Err("the environments need at least 1 thread to step on".into());
@@ -127,8 +129,8 @@ impl Container {
         let step_pool = StepPool::new(threads).map_err(|e| format!("--threads {threads}: {e}"))?;
         let ros_environment =
             RosEnvironment::read(|k| std::env::var(k).ok()).map_err(|e| e.to_string())?;
-        // The composed nodes share one participant, so one enclave (the override, else `/`).
-        let context = new_context(&ros_environment, None).map_err(|e| e.to_string())?;
+        // The composed nodes share one participant, so one enclave.
+        let context = new_context(&ros_environment, enclave).map_err(|e| e.to_string())?;
         let (ended_tx, ended_rx) = mpsc::channel();
         let mut container = Container {
             composition: Composition {
