@@ -21,7 +21,7 @@ use pki::{Authority, Validity};
 ///                                         permissions_ca.cert.pem link to it)
 ///   KEYSTORE/private/ca.key.pem           the CA's key (and the two links)
 ///   KEYSTORE/enclaves/governance.xml|p7s  the domain's rules, signed by the CA
-///   KEYSTORE/enclaves/<ENCLAVE>/          cert.pem, key.pem, permissions.xml|p7s, and links
+///   KEYSTORE/enclaves/ENCLAVE/            cert.pem, key.pem, permissions.xml|p7s, and links
 ///                                         to governance.p7s and the two CA certificates
 ///
 /// Keys are EC P-256, unencrypted PKCS#8 (the security plugins take no password);
