@@ -49,7 +49,6 @@ if mode == "authors":
     checksum = float(out["observations"][:, :3].sum())
 else:
     from composuite_ros import datasets
-from composuite_ros.datasets import medium
     data = datasets.load(root, "random", tasks=folders)
     n = len(data)
     if mode == "ours-pass":

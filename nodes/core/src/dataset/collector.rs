@@ -124,23 +124,10 @@ impl Collector {
         };
         while chunk.episodes.len() < max_episodes && chunk.rows.len() < max_rows {
             let round = (max_episodes - chunk.episodes.len()).min(self.envs.len());
-            let seeds = self.take_seeds(round)?;
             let budget = max_rows - chunk.rows.len();
-            let (task, policy) = (self.task, self.policy);
-            let mut slots: Vec<Slot<'_, Played>> = self
-                .envs
-                .iter_mut()
-                .zip(&seeds)
-                .map(|(env, &seed)| (env, seed, None))
-                .collect();
-            self.pool.for_each(&mut slots, |_, (env, seed, played)| {
-                let mut source = policy.source(task, *seed);
-                *played = Some(play_episode(env, *seed, budget, source.as_mut()));
-            });
-            for (_, seed, played) in slots {
-                let played = played
-                    .expect("every slot is played")
-                    .map_err(|error| CollectError::Env { seed, error })?;
+            for (seed, played) in self.play_round(round, |env, seed, source| {
+                play_episode(env, seed, budget, source)
+            })? {
                 let left = max_rows - chunk.rows.len();
                 chunk.episodes.push(EpisodeStart {
                     row: chunk.rows.len(),
@@ -171,27 +158,41 @@ impl Collector {
     pub fn successes(&mut self, episodes: usize) -> Result<Vec<bool>, CollectError> {
         let mut won = Vec::with_capacity(episodes);
         while won.len() < episodes {
-            let seeds = self.take_seeds((episodes - won.len()).min(self.envs.len()))?;
-            let (task, policy) = (self.task, self.policy);
-            let mut slots: Vec<Slot<'_, bool>> = self
-                .envs
-                .iter_mut()
-                .zip(&seeds)
-                .map(|(env, &seed)| (env, seed, None))
-                .collect();
-            self.pool.for_each(&mut slots, |_, (env, seed, succeeded)| {
-                let mut source = policy.source(task, *seed);
-                *succeeded = Some(play_until_success(env, *seed, source.as_mut()));
-            });
-            for (_, seed, succeeded) in slots {
-                won.push(
-                    succeeded
-                        .expect("every slot is played")
-                        .map_err(|error| CollectError::Env { seed, error })?,
-                );
-            }
+            let round = (episodes - won.len()).min(self.envs.len());
+            let played = self.play_round(round, play_until_success)?;
+            won.extend(played.into_iter().map(|(_, succeeded)| succeeded));
         }
         Ok(won)
+    }
+
+    /// Play the next `n` seeds the task can start with, each by `play` in an environment of its
+    /// own on the pool: `(seed, what play gave)`, in seed order.
+    fn play_round<T: Send>(
+        &mut self,
+        n: usize,
+        play: impl Fn(&mut Env, u64, &mut dyn ActionSource) -> Result<T, EnvError> + Sync,
+    ) -> Result<Vec<(u64, T)>, CollectError> {
+        let seeds = self.take_seeds(n)?;
+        let (task, policy) = (self.task, self.policy);
+        let mut slots: Vec<Slot<'_, T>> = self
+            .envs
+            .iter_mut()
+            .zip(&seeds)
+            .map(|(env, &seed)| (env, seed, None))
+            .collect();
+        self.pool.for_each(&mut slots, |_, (env, seed, outcome)| {
+            let mut source = policy.source(task, *seed);
+            *outcome = Some(play(env, *seed, source.as_mut()));
+        });
+        slots
+            .into_iter()
+            .map(|(_, seed, outcome)| {
+                let outcome = outcome.expect("every slot is played");
+                outcome
+                    .map(|value| (seed, value))
+                    .map_err(|error| CollectError::Env { seed, error })
+            })
+            .collect()
     }
 
     /// The next `n` seeds the task can start with.
