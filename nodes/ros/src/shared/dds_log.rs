@@ -5,6 +5,7 @@
 //! `trace`; default `error`): RustDDS is chatty at `info` and below, so raise it only to
 //! investigate.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{SystemTime, UNIX_EPOCH};
 
 /// The environment variable that sets the DDS log level.
@@ -21,20 +22,54 @@ impl log::Log for StderrLog {
         if !self.enabled(record.metadata()) {
             return;
         }
-        let now = SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .unwrap_or_default();
-        eprintln!(
-            "[{}] [{}.{:09}] [dds {}]: {}",
-            record.level(),
-            now.as_secs(),
-            now.subsec_nanos(),
-            record.target(),
-            record.args()
-        );
+        if log::max_level() < log::LevelFilter::Debug && key_exchange_noise(record) {
+            // Once, what they are; each one only at debug.
+            if !EXPLAINED.swap(true, Ordering::Relaxed) {
+                print_line(
+                    log::Level::Warn,
+                    record.target(),
+                    &format_args!(
+                        "secured messages that met an endpoint whose keys had not arrived yet \
+                         could not be encoded or decoded and were dropped (normal while \
+                         participants exchange keys after discovery; reliable ones are sent \
+                         again); {DDS_LOG_VAR}=debug shows each"
+                    ),
+                );
+            }
+            return;
+        }
+        print_line(record.level(), record.target(), record.args());
     }
 
     fn flush(&self) {}
+}
+
+/// Whether the key-exchange explanation was printed.
+static EXPLAINED: AtomicBool = AtomicBool::new(false);
+
+fn print_line(level: log::Level, target: &str, text: &std::fmt::Arguments<'_>) {
+    let now = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap_or_default();
+    eprintln!(
+        "[{level}] [{}.{:09}] [dds {target}]: {text}",
+        now.as_secs(),
+        now.subsec_nanos(),
+    );
+}
+
+/// Whether RustDDS logs `record` (as an error) because a secured message met an endpoint whose
+/// crypto keys have not arrived yet: it happens for a moment after every discovery of a
+/// secured participant, until the key exchange completes.
+fn key_exchange_noise(record: &log::Record) -> bool {
+    let target = record.target();
+    if !target.starts_with("rustdds::") || record.level() != log::Level::Error {
+        return false;
+    }
+    let text = record.args().to_string();
+    text.contains("Could not find a remote EndpointCryptoHandle")
+        || (target == "rustdds::rtps::message_receiver"
+            && text.starts_with("Submessage decoding failed: SecurityError"))
 }
 
 /// The level named by the variable's value (`None` = unset).
@@ -76,5 +111,39 @@ mod tests {
             err.contains("COMPOSUITE_DDS_LOG=loud") && err.contains("trace"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn only_the_key_exchange_errors_count_as_its_noise() {
+        let check = |target: &str, level: log::Level, text: &str| {
+            key_exchange_noise(
+                &log::Record::builder()
+                    .target(target)
+                    .level(level)
+                    .args(format_args!("{text}"))
+                    .build(),
+            )
+        };
+        let receiver = "rustdds::rtps::message_receiver";
+        let decode = "Submessage decoding failed: SecurityError { msg: \"ring\" }";
+        assert!(check(receiver, log::Level::Error, decode));
+        assert!(check(
+            "rustdds::rtps::writer",
+            log::Level::Error,
+            "Failed to send message to readers. Encoding failed: SecurityError { msg: \"Could \
+             not find a remote EndpointCryptoHandle for the pair\" }"
+        ));
+        assert!(!check(receiver, log::Level::Warn, decode));
+        assert!(!check("rustdds::rtps::reader", log::Level::Error, decode));
+        assert!(!check(
+            receiver,
+            log::Level::Error,
+            "Submessage decoding failed: Io"
+        ));
+        assert!(!check(
+            "composuite",
+            log::Level::Error,
+            "Could not find a remote EndpointCryptoHandle"
+        ));
     }
 }
