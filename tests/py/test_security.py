@@ -8,7 +8,9 @@ from __future__ import annotations
 import json
 import os
 import signal
+import socket
 import subprocess
+import threading
 import time
 
 import pytest
@@ -58,6 +60,50 @@ def test_a_secured_suite_plays_an_episode_bit_for_bit(keystore, domain):
     assert done.returncode == 0, done.stderr[-3000:]
     episode = json.loads(done.stdout.splitlines()[-1])
     assert episode["identical_to_in_process"] and episode["success"], episode
+
+
+# Bytes of the samples themselves that go on the wire in clear in a plain session: the task's
+# objective (set_task, the scene, the episode status) and a joint's name (joint_states,
+# joint_command). (Topic and type names are not among them: RustDDS announces a secured
+# endpoint in the plain endpoint discovery, signed but not encrypted — see the book.)
+CLEAR_TEXT = (b"pick_place", b"l_finger_joint")
+
+
+@pytest.mark.parametrize("secured", [False, True], ids=["plain", "secured"])
+def test_nothing_readable_goes_on_the_wire_when_secured(keystore, domain, secured):
+    """Every datagram on the namespace's loopback during a demo episode, captured with a packet
+    socket: plain, the task's objective and a joint's name are there to read in the samples;
+    secured (data encrypted, messages signed), neither is."""
+    packets: list[bytes] = []
+    stop = threading.Event()
+    sniffer = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.ntohs(0x0003))
+    sniffer.bind(("lo", 0))
+    sniffer.settimeout(0.1)
+
+    def capture():
+        while not stop.is_set():
+            try:
+                packets.append(sniffer.recv(65535))
+            except socket.timeout:
+                pass
+
+    thread = threading.Thread(target=capture)
+    thread.start()
+    env = switches(keystore, domain)
+    if not secured:
+        env = {k: v for k, v in env.items() if not k.startswith("ROS_SECURITY")}
+    try:
+        done = subprocess.run([str(COMPOSUITE), "demo", "--episodes", "1", "--json"], env=env,
+                              capture_output=True, text=True, timeout=120)
+    finally:
+        stop.set()
+        thread.join()
+        sniffer.close()
+    assert done.returncode == 0, done.stderr[-3000:]
+    wire = b"".join(packets)
+    assert len(packets) > 1000 and len(wire) > 200_000, (len(packets), len(wire))
+    readable = [text for text in CLEAR_TEXT if text in wire]
+    assert readable == ([] if secured else list(CLEAR_TEXT)), readable
 
 
 def test_an_enclave_without_joint_command_cannot_command_the_sim(keystore, domain):
