@@ -193,6 +193,18 @@ fn ros_args_sections_are_parsed_like_rcl() {
     assert_eq!(a.other, ["--verbose", "extra"]);
 }
 
+/// Namespaces and security enclaves: `/`, or `/`-separated tokens of letters, digits and
+/// underscores, none starting with a digit.
+#[test]
+fn fully_qualified_names_are_absolute_ros_names() {
+    for good in ["/", "/talker", "/composuite/sim", "/_a/b_2"] {
+        assert!(ros_args::is_fully_qualified_name(good), "{good}");
+    }
+    for bad in ["", "talker", "/talker/", "//x", "/2x", "/a-b", "/a b"] {
+        assert!(!ros_args::is_fully_qualified_name(bad), "{bad}");
+    }
+}
+
 #[test]
 fn bad_ros_args_say_what_is_valid() {
     let err = |text: &str| ros_args::parse(&args(text)).unwrap_err().to_string();

@@ -2,7 +2,7 @@
 //! what is valid.
 
 use composuite_core::TaskSpec;
-use composuite_ros::shared::ros_args::is_valid_name;
+use composuite_ros::shared::ros_args::is_fully_qualified_name;
 
 use super::LaunchArgs;
 
@@ -22,16 +22,14 @@ pub(super) fn validate(args: &LaunchArgs) -> Result<(), String> {
         composuite_ros::shared::node::service_mapping(mapping)
             .map_err(|e| format!("--service-mapping: {e}"))?;
     }
-    let namespace_ok = args.namespace == "/"
-        || (args.namespace.starts_with('/') && is_valid_name(&args.namespace, true));
-    if !namespace_ok {
+    if !is_fully_qualified_name(&args.namespace) {
         return Err(format!(
             "--namespace {} is invalid; it must be absolute, e.g. /train",
             args.namespace
         ));
     }
     if let Some(enclave) = &args.enclave
-        && !(enclave.starts_with('/') && is_valid_name(enclave, true))
+        && !is_fully_qualified_name(enclave)
     {
         return Err(format!(
             "--enclave {enclave} is invalid; it must be a fully qualified name, e.g. /composuite/sim"

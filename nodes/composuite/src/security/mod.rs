@@ -10,6 +10,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
 
+use composuite_ros::shared::environment::MAX_DOMAIN_ID;
+use composuite_ros::shared::ros_args::is_fully_qualified_name;
+use composuite_ros::shared::security::enclave_dir;
 use documents::Grant;
 use pki::{Authority, Validity};
 
@@ -129,9 +132,6 @@ pub fn run(args: &SecurityArgs) -> Result<(), String> {
     }
 }
 
-/// The largest domain id DDS's default port mapping allows.
-const MAX_DOMAIN_ID: u32 = 232;
-
 /// The domain id given, else `ROS_DOMAIN_ID`, else 0 (what `ros2 security` does).
 fn domain(given: Option<u32>) -> Result<u32, String> {
     let (id, source) = match (given, std::env::var("ROS_DOMAIN_ID")) {
@@ -142,9 +142,10 @@ fn domain(given: Option<u32>) -> Result<u32, String> {
         },
         _ => (0, String::new()),
     };
-    if id > MAX_DOMAIN_ID {
+    let max = u32::from(MAX_DOMAIN_ID);
+    if id > max {
         return Err(format!(
-            "{source} is not a domain id (a whole number, 0 to {MAX_DOMAIN_ID})"
+            "{source} is not a domain id (a whole number, 0 to {max})"
         ));
     }
     Ok(id)
@@ -245,28 +246,6 @@ pub fn create_keystore(keystore: &Path, domain: u32, days: u32) -> Result<bool, 
     Ok(true)
 }
 
-/// Whether `name` is a fully qualified ROS name an enclave can have: `/`, or `/`-separated
-/// tokens of letters, digits and underscores, none starting with a digit.
-fn valid_enclave(name: &str) -> bool {
-    name == "/"
-        || name.strip_prefix('/').is_some_and(|rest| {
-            rest.split('/').all(|token| {
-                token
-                    .chars()
-                    .next()
-                    .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-                    && token.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-            })
-        })
-}
-
-/// The enclave's folder in the keystore (`/` is `enclaves/` itself, as rcl looks it up).
-pub fn enclave_dir(keystore: &Path, enclave: &str) -> PathBuf {
-    keystore
-        .join("enclaves")
-        .join(enclave.trim_start_matches('/'))
-}
-
 /// Make `enclave` in `keystore` with the permissions `grant`; returns its folder.
 pub fn create_enclave(
     keystore: &Path,
@@ -275,7 +254,7 @@ pub fn create_enclave(
     days: u32,
     grant: &Grant,
 ) -> Result<PathBuf, String> {
-    if !valid_enclave(enclave) {
+    if !is_fully_qualified_name(enclave) {
         return Err(format!(
             "enclave {enclave:?} is not a fully qualified ROS name: `/`, or `/`-separated \
              tokens of letters, digits and underscores not starting with a digit, such as \
@@ -373,19 +352,4 @@ pub fn list_enclaves(keystore: &Path) -> Result<Vec<String>, String> {
     }
     found.sort();
     Ok(found)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn enclave_names_are_fully_qualified_ros_names() {
-        for good in ["/", "/talker", "/composuite/sim", "/_a/b_2"] {
-            assert!(valid_enclave(good), "{good}");
-        }
-        for bad in ["", "talker", "/talker/", "//x", "/2x", "/a-b", "/a b"] {
-            assert!(!valid_enclave(bad), "{bad}");
-        }
-    }
 }

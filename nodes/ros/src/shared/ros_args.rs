@@ -110,6 +110,12 @@ pub fn is_valid_name(name: &str, allow_absolute: bool) -> bool {
     })
 }
 
+/// Whether `name` is a fully qualified ROS name (a namespace or an enclave): `/`, or
+/// `/`-separated tokens as [`is_valid_name`] takes them, starting with `/`.
+pub fn is_fully_qualified_name(name: &str) -> bool {
+    name.starts_with('/') && is_valid_name(name, true)
+}
+
 fn split_assignment<'a>(flag: &str, text: &'a str) -> Result<(&'a str, &'a str), RosArgsError> {
     text.split_once(":=")
         .ok_or_else(|| RosArgsError(format!("`{flag} {text}` needs the form name:=value")))
@@ -141,7 +147,7 @@ pub fn parse(args: &[String]) -> Result<RosArgs, RosArgsError> {
                 let (from, to) = split_assignment(arg, &text)?;
                 match from {
                     "__ns" => {
-                        if !is_valid_name(to, true) || !to.starts_with('/') {
+                        if !is_fully_qualified_name(to) {
                             return Err(RosArgsError(format!(
                                 "namespace `{to}` is invalid; it must be absolute, e.g. /env_00"
                             )));
@@ -201,7 +207,7 @@ pub fn parse(args: &[String]) -> Result<RosArgs, RosArgsError> {
             }
             "-e" | "--enclave" => {
                 let enclave = value(arg)?;
-                if !is_valid_name(&enclave, true) || !enclave.starts_with('/') {
+                if !is_fully_qualified_name(&enclave) {
                     return Err(RosArgsError(format!(
                         "enclave `{enclave}` is not a fully qualified name such as /composuite/sim"
                     )));

@@ -18,6 +18,13 @@ pub const ENCLAVE_FILES: [&str; 6] = [
     "permissions.p7s",
 ];
 
+/// An enclave's folder in a keystore (`/`, the default enclave, is `enclaves/` itself).
+pub fn enclave_dir(keystore: &Path, enclave: &str) -> PathBuf {
+    keystore
+        .join("enclaves")
+        .join(enclave.trim_start_matches('/'))
+}
+
 /// How a participant joins.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Join {
@@ -68,9 +75,7 @@ pub fn decide(security: &SecurityEnvironment, enclave_arg: Option<&str>) -> Resu
             "ROS_SECURITY_ENABLE=true but ROS_SECURITY_KEYSTORE is unset or empty".into(),
         );
     };
-    let dir = Path::new(keystore)
-        .join("enclaves")
-        .join(enclave.trim_start_matches('/'));
+    let dir = enclave_dir(Path::new(keystore), &enclave);
     if !dir.is_dir() {
         return refuse(format!(
             "unable to find a folder matching the enclave '{enclave}' in '{keystore}/enclaves' \
@@ -111,7 +116,7 @@ mod tests {
             std::process::id(),
             enclave.replace('/', "_")
         ));
-        let dir = root.join("enclaves").join(enclave.trim_start_matches('/'));
+        let dir = enclave_dir(&root, enclave);
         std::fs::create_dir_all(&dir).unwrap();
         for f in files {
             std::fs::write(dir.join(f), "x").unwrap();
