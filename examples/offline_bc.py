@@ -83,9 +83,8 @@ def main() -> int:
         datasets.generate(data_root, [task], ["expert"], transitions=args.transitions,
                           overwrite=True, progress=lambda line: print("  " + line, flush=True))
     data = datasets.load(data_root, "expert", tasks=[task.folder])
-    starts = data.parts[0]["episode_starts"][:]
-    won = np.maximum.reduceat(data.parts[0]["successes"][:], starts)
-    print(f"   {len(data):,} rows, {len(starts)} episodes, {won.mean():.0%} of them succeed "
+    won = data.parts[0].episode_successes()
+    print(f"   {len(data):,} rows, {len(won)} episodes, {won.mean():.0%} of them succeed "
           f"({time.monotonic() - started:.0f} s)", flush=True)
 
     print(f"2. BC: {args.steps:,} steps on the CPU", flush=True)
@@ -113,7 +112,7 @@ def main() -> int:
     bc_return = float(np.mean([r.episode_return for r in results]))
     expert_success = medium.success_rate(str(task.task), 0.0, episodes=args.episodes,
                                          first_seed=args.eval_seed, threads=2)
-    result = {"task": str(task.task), "rows": len(data), "episodes_in_data": int(len(starts)),
+    result = {"task": str(task.task), "rows": len(data), "episodes_in_data": int(len(won)),
               "data_success": float(won.mean()), "bc_steps": args.steps,
               "bc_fit_seconds": fit_seconds, "eval_episodes": args.episodes,
               "eval_first_seed": args.eval_seed, "bc_success": bc_success,

@@ -43,6 +43,7 @@ def test_expert_files_succeed_and_replay_bit_for_bit(tmp_path):
         assert set(np.unique(actions[:, 7])) <= {-1.0, 0.0, 1.0}
     verdict = datasets.verify(path, threads=2)
     assert verdict.ok, verdict.difference
+    assert datasets.open_task(path).episode_successes().tolist() == [True, True]
     info = cli("info", str(path))
     assert "episodes: 2, 2 with a success (100.0%)" in info.stdout, info
 

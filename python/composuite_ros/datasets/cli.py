@@ -256,10 +256,9 @@ def _info(args) -> int:
         print(f"{data.path}: {len(data):,} rows, task {data.task.folder if data.task else '?'}, "
               f"{'memory-mapped' if data.mapped else 'compressed'}, {successes:,} success rows")
         if "episode_starts" in data.arrays:
-            starts = data["episode_starts"][:]
-            won = np.maximum.reduceat(data["successes"][:], starts) if len(starts) else starts
-            print(f"  episodes: {len(starts):,}, {np.count_nonzero(won):,} with a success "
-                  f"({np.count_nonzero(won) / max(len(starts), 1):.1%})")
+            won = data.episode_successes()
+            print(f"  episodes: {len(won):,}, {np.count_nonzero(won):,} with a success "
+                  f"({np.count_nonzero(won) / max(len(won), 1):.1%})")
         for key, value in sorted(data.attrs.items()):
             print(f"  {key}: {value}")
     return 0

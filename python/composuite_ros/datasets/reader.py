@@ -50,6 +50,16 @@ class TaskData:
         ends = np.append(starts[1:], len(self))
         return [(int(a), int(b), int(s)) for a, b, s in zip(starts, ends, seeds)]
 
+    def episode_successes(self) -> np.ndarray:
+        """Whether each episode has a successful step (bool, one per episode; files this suite
+        wrote)."""
+        if "episode_starts" not in self.arrays:
+            raise DatasetError(f"{self.path} has no episode_starts: not a file this suite wrote")
+        starts = np.asarray(self.arrays["episode_starts"])
+        if not len(starts):
+            return np.zeros(0, bool)
+        return np.maximum.reduceat(np.asarray(self.arrays["successes"]), starts) > 0
+
 
 def _attr(value):
     if isinstance(value, bytes):
