@@ -18,25 +18,31 @@ pub fn body_poses(
     q_fingers: [f64; 2],
 ) -> Vec<Isometry3<f64>> {
     let mut poses = vec![robot_base_pose(); model.bodies.len()];
-    for (j, joint) in model.joints.iter().enumerate() {
+    for j in 0..model.joints.len() {
         let value = if j < ARM_DOF {
             q[j]
         } else {
             q_fingers[j - ARM_DOF]
         };
-        let motion = match joint.kind {
-            JointKind::Revolute => Isometry3::from_parts(
-                Translation3::identity(),
-                UnitQuaternion::from_scaled_axis(joint.axis * value),
-            ),
-            JointKind::Prismatic => Isometry3::from_parts(
-                Translation3::from(joint.axis * value),
-                UnitQuaternion::identity(),
-            ),
-        };
-        poses[joint.child] = poses[joint.parent] * joint.origin * motion;
+        place_child(model, j, value, &mut poses);
     }
     poses
+}
+
+/// Sets the pose of joint `j`'s child body from its parent's and the joint's `value`.
+fn place_child(model: &RobotModel, j: usize, value: f64, poses: &mut [Isometry3<f64>]) {
+    let joint = &model.joints[j];
+    let motion = match joint.kind {
+        JointKind::Revolute => Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_scaled_axis(joint.axis * value),
+        ),
+        JointKind::Prismatic => Isometry3::from_parts(
+            Translation3::from(joint.axis * value),
+            UnitQuaternion::identity(),
+        ),
+    };
+    poses[joint.child] = poses[joint.parent] * joint.origin * motion;
 }
 
 /// World pose of a named URDF link for arm joint positions `q`.
@@ -81,8 +87,21 @@ pub fn solve_ik(
     let mut q = *q0;
     let damping = 0.05_f64;
     let mut result = None;
+    // Only the arm joints move the link (unless it is on a finger, then all of them do); the
+    // poses are updated in place, in `body_poses`' order and arithmetic.
+    let mut poses = body_poses(model, &q, [0.0, 0.0]);
+    let moving = if model.joints[ARM_DOF..].iter().any(|j| j.child == body) {
+        model.joints.len()
+    } else {
+        ARM_DOF
+    };
     for iteration in 0..=max_iterations {
-        let poses = body_poses(model, &q, [0.0, 0.0]);
+        if iteration > 0 {
+            let values = q.iter().copied().chain([0.0, 0.0]);
+            for (j, value) in values.enumerate().take(moving) {
+                place_child(model, j, value, &mut poses);
+            }
+        }
         let pose = poses[body] * in_body;
         let p = pose.translation.vector;
         let e_pos = target.position - p;
@@ -108,8 +127,8 @@ pub fn solve_ik(
         let mut err = SVector::<f64, 6>::zeros();
         err.fixed_rows_mut::<3>(0).copy_from(&e_pos);
         err.fixed_rows_mut::<3>(3).copy_from(&(e_rot * w));
-        let jjt = jac * jac.transpose() + SMatrix::<f64, 6, 6>::identity() * damping * damping;
-        let dq = jac.transpose() * jjt.lu().solve(&err)?;
+        let jjt = damped_gram(&jac, damping * damping);
+        let dq = transpose_times(&jac, &jjt.lu().solve(&err)?);
         for (j, joint) in model.joints.iter().enumerate().take(ARM_DOF) {
             // Limit each update so the linearisation stays valid.
             q[j] += dq[j].clamp(-0.2, 0.2);
@@ -119,6 +138,31 @@ pub fn solve_ik(
         }
     }
     result
+}
+
+/// `J·Jᵀ + λ²·I`: what nalgebra's `jac * jac.transpose() + I * λ * λ` computes, bit for bit
+/// (each entry summed over the columns in order, the identity term added to every entry), without
+/// its generic product loops and the transpose's copy.
+fn damped_gram(jac: &SMatrix<f64, 6, ARM_DOF>, lambda_squared: f64) -> SMatrix<f64, 6, 6> {
+    SMatrix::from_fn(|i, j| {
+        let mut sum = jac[(i, 0)] * jac[(j, 0)];
+        for k in 1..ARM_DOF {
+            sum += jac[(i, k)] * jac[(j, k)];
+        }
+        sum + if i == j { lambda_squared } else { 0.0 }
+    })
+}
+
+/// `Jᵀ·x`, as nalgebra's `jac.transpose() * x` computes it, bit for bit (summed over the rows in
+/// order).
+fn transpose_times(jac: &SMatrix<f64, 6, ARM_DOF>, x: &SVector<f64, 6>) -> SVector<f64, ARM_DOF> {
+    SVector::from_fn(|i, _| {
+        let mut sum = jac[(0, i)] * x[0];
+        for k in 1..6 {
+            sum += jac[(k, i)] * x[k];
+        }
+        sum
+    })
 }
 
 /// The arm joints' Jacobian at the point `p` (world) of the last body: linear rows first, then
@@ -170,4 +214,37 @@ pub fn frame_from_axes(z: Vector3<f64>, y: Vector3<f64>) -> UnitQuaternion<f64> 
     UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(Matrix3::from_columns(
         &[x, y, z],
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Mt19937;
+
+    /// The IK's hand-written products give nalgebra's results bit for bit (the IK's solutions,
+    /// and so the expert's plans, stay what they were).
+    #[test]
+    fn the_ik_products_equal_nalgebras() {
+        let mut rng = Mt19937::init_genrand(3);
+        for _ in 0..200 {
+            let jac = SMatrix::<f64, 6, ARM_DOF>::from_fn(|_, _| 2.0 * rng.random_sample() - 1.0);
+            let x = SVector::<f64, 6>::from_fn(|_, _| 2.0 * rng.random_sample() - 1.0);
+            let damping = 0.05_f64;
+            let gram = jac * jac.transpose() + SMatrix::<f64, 6, 6>::identity() * damping * damping;
+            let ours = damped_gram(&jac, damping * damping);
+            assert!(
+                gram.iter()
+                    .zip(ours.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+            let product = jac.transpose() * x;
+            let ours = transpose_times(&jac, &x);
+            assert!(
+                product
+                    .iter()
+                    .zip(ours.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+        }
+    }
 }

@@ -5,6 +5,8 @@
 //! box's faces); each arena solid is a box (a cylinder by its bounding box). The clearance is
 //! the smallest gap between any sphere and any solid, negative when they overlap.
 
+use std::ops::Range;
+
 use nalgebra::{Isometry3, Point3, Vector3};
 
 use crate::arena::{Placed, Primitive, arena_parts, object_parts};
@@ -35,10 +37,32 @@ struct Solid {
     half: Vector3<f64>,
 }
 
+/// A run of consecutive spheres on one body, and one sphere around all of them: where that
+/// sphere keeps clear of a solid (or of a bound), none of the run's spheres can come closer, and
+/// their distances to that solid are not computed.
+#[derive(Debug, Clone)]
+struct Group {
+    body: usize,
+    /// Centre of the covering sphere, in the body's frame.
+    centre: Point3<f64>,
+    /// Its radius: no point of the run's spheres is further from `centre`.
+    reach: f64,
+    spheres: Range<usize>,
+}
+
+/// How much a skipped distance is allowed to be below its computed lower bound, for rounding:
+/// far below what any decision rests on, far above what rounding does at these sizes.
+const BOUND_SLACK: f64 = 1e-9;
+
+/// The most solids an arena has with an object added (checked where they are made): the
+/// solids still in question for a group fit a fixed list on the stack.
+const MAX_SOLIDS: usize = 64;
+
 /// The spheres of one arm and the solids of one arena.
 #[derive(Clone)]
 pub(super) struct Clearance {
     spheres: Vec<Sphere>,
+    groups: Vec<Group>,
     solids: Vec<Solid>,
 }
 
@@ -70,20 +94,33 @@ impl Clearance {
             .filter(|p| p.collides)
             .map(solid)
             .collect();
-        Clearance { spheres, solids }
+        Clearance::of(spheres, solids)
+    }
+
+    fn of(spheres: Vec<Sphere>, solids: Vec<Solid>) -> Clearance {
+        assert!(
+            solids.len() <= MAX_SOLIDS,
+            "{} solids: at most {MAX_SOLIDS}",
+            solids.len()
+        );
+        Clearance {
+            groups: groups(&spheres),
+            spheres,
+            solids,
+        }
     }
 
     /// The same arena with the object's solids added at `pose`, as something to keep clear of
     /// on the way to a grasp.
     pub fn with_object(&self, object: Object, pose: &Isometry3<f64>) -> Clearance {
-        let mut more = self.clone();
-        more.solids.extend(object_parts(object).iter().map(|part| {
+        let mut solids = self.solids.clone();
+        solids.extend(object_parts(object).iter().map(|part| {
             solid(&Placed {
                 pose: pose * part.pose,
                 ..*part
             })
         }));
-        more
+        Clearance::of(self.spheres.clone(), solids)
     }
 
     /// The same arena with the arm holding the object: the object (at `object_pose` with the
@@ -95,12 +132,12 @@ impl Clearance {
         object: Object,
         object_pose: &Isometry3<f64>,
     ) -> Clearance {
-        let mut more = self.clone();
+        let mut spheres = self.spheres.clone();
         let hand = model.joints[ARM_DOF - 1].child;
         let to_hand = body_poses(model, q, [0.0, 0.0])[hand].inverse() * object_pose;
         for part in object_parts(object) {
             for (centre, radius) in held_cover(&part.shape) {
-                more.spheres.push(Sphere {
+                spheres.push(Sphere {
                     body: hand,
                     centre: to_hand * part.pose * centre,
                     radius,
@@ -109,7 +146,7 @@ impl Clearance {
                 });
             }
         }
-        more
+        Clearance::of(spheres, self.solids.clone())
     }
 
     /// How crowded the links that can swing with the gripper held still are at `q`: the sum over
@@ -118,16 +155,37 @@ impl Clearance {
     /// points away from several solids close at once.
     pub fn crowding(&self, model: &RobotModel, q: &[f64; ARM_DOF], margin: f64) -> f64 {
         let poses = body_poses(model, q, [0.0, 0.0]);
-        self.spheres
-            .iter()
-            .filter(|s| s.swings)
-            .map(|s| (margin - self.sphere_gap(&poses, s)).max(0.0).powi(2))
-            .sum()
+        let mut sum = -0.0;
+        for group in &self.groups {
+            if !self.spheres[group.spheres.start].swings {
+                continue;
+            }
+            // Solids at least `margin` from every sphere of the group add nothing.
+            let near = self.near(&poses, group, margin);
+            for s in &self.spheres[group.spheres.clone()] {
+                sum += (margin - self.sphere_gap(&poses, s, &near))
+                    .max(0.0)
+                    .powi(2);
+            }
+        }
+        sum
     }
 
     /// The smallest gap (m) between the arm at `q` (fingers open) and the arena.
     pub fn at(&self, model: &RobotModel, q: &[f64; ARM_DOF]) -> f64 {
         self.smallest_gap(model, q, |_| true)
+    }
+
+    /// Whether the arm at `q` keeps at least `least` (m) from the arena: `at(model, q) >=
+    /// least`, answered as soon as one sphere comes closer.
+    pub fn keeps(&self, model: &RobotModel, q: &[f64; ARM_DOF], least: f64) -> bool {
+        let poses = body_poses(model, q, [0.0, 0.0]);
+        self.groups.iter().all(|group| {
+            let near = self.near(&poses, group, least);
+            self.spheres[group.spheres.clone()]
+                .iter()
+                .all(|s| self.sphere_gap(&poses, s, &near) >= least)
+        })
     }
 
     /// The smallest gap (m) between the arm at `q` and the arena, the fingers left out.
@@ -143,21 +201,86 @@ impl Clearance {
         counts: impl Fn(&Sphere) -> bool,
     ) -> f64 {
         let poses = body_poses(model, q, [0.0, 0.0]);
-        self.spheres
-            .iter()
-            .filter(|s| counts(s))
-            .map(|s| self.sphere_gap(&poses, s))
-            .fold(f64::INFINITY, f64::min)
+        let mut smallest = f64::INFINITY;
+        for group in &self.groups {
+            // Solids no closer to the group than the smallest gap so far cannot lower it.
+            let near = self.near(&poses, group, smallest);
+            for s in self.spheres[group.spheres.clone()]
+                .iter()
+                .filter(|s| counts(s))
+            {
+                smallest = smallest.min(self.sphere_gap(&poses, s, &near));
+            }
+        }
+        smallest
     }
 
-    /// The gap (m) between one sphere, its body at `poses`, and the nearest arena solid.
-    fn sphere_gap(&self, poses: &[Isometry3<f64>], s: &Sphere) -> f64 {
+    /// The solids that may come closer than `bound` (m) to a sphere of `group`, its body at
+    /// `poses`: those whose distance from the group's covering sphere is below it.
+    fn near(&self, poses: &[Isometry3<f64>], group: &Group, bound: f64) -> Near {
+        let centre = poses[group.body] * group.centre;
+        let mut near = Near {
+            solids: [0; MAX_SOLIDS],
+            len: 0,
+        };
+        for (i, solid) in self.solids.iter().enumerate() {
+            if box_distance(solid, &centre) - group.reach - BOUND_SLACK < bound {
+                near.solids[near.len] = i as u8;
+                near.len += 1;
+            }
+        }
+        near
+    }
+
+    /// The gap (m) between one sphere, its body at `poses`, and the nearest of the `near`
+    /// solids (infinite when there are none).
+    fn sphere_gap(&self, poses: &[Isometry3<f64>], s: &Sphere, near: &Near) -> f64 {
+        if near.len == 0 {
+            return f64::INFINITY;
+        }
         let c = poses[s.body] * s.centre;
-        self.solids
+        near.solids[..near.len]
             .iter()
-            .map(|solid| box_distance(solid, &c) - s.radius)
+            .map(|&i| box_distance(&self.solids[i as usize], &c) - s.radius)
             .fold(f64::INFINITY, f64::min)
     }
+}
+
+/// Indices of the solids still in question for one group.
+struct Near {
+    solids: [u8; MAX_SOLIDS],
+    len: usize,
+}
+
+/// The runs of consecutive spheres on one body, each with a sphere covering it.
+fn groups(spheres: &[Sphere]) -> Vec<Group> {
+    let mut groups: Vec<Group> = Vec::new();
+    let mut start = 0;
+    for end in 1..=spheres.len() {
+        if end < spheres.len() && spheres[end].body == spheres[start].body {
+            continue;
+        }
+        let run = &spheres[start..end];
+        // The centre of the run's bounding box, and the furthest sphere surface from it.
+        let (mut lo, mut hi) = (run[0].centre, run[0].centre);
+        for s in run {
+            lo = lo.inf(&s.centre);
+            hi = hi.sup(&s.centre);
+        }
+        let centre = nalgebra::center(&lo, &hi);
+        let reach = run
+            .iter()
+            .map(|s| (s.centre - centre).norm() + s.radius)
+            .fold(0.0, f64::max);
+        groups.push(Group {
+            body: run[0].body,
+            centre,
+            reach,
+            spheres: start..end,
+        });
+        start = end;
+    }
+    groups
 }
 
 /// Spheres (centre in the shape's frame, radius) covering a primitive.
@@ -304,4 +427,89 @@ pub(super) fn best_clear(
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::axes::{AxisElement, Robot};
+    use crate::physics::robot_model;
+    use crate::rng::Mt19937;
+
+    /// Every sphere against every solid, as the clearance was computed before its groups
+    /// skipped solids: the answers the pruned ones must equal bit for bit.
+    fn exhaustive(c: &Clearance, model: &RobotModel, q: &[f64; ARM_DOF]) -> Vec<f64> {
+        let poses = body_poses(model, q, [0.0, 0.0]);
+        c.spheres
+            .iter()
+            .map(|s| {
+                let centre = poses[s.body] * s.centre;
+                c.solids
+                    .iter()
+                    .map(|solid| box_distance(solid, &centre) - s.radius)
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect()
+    }
+
+    /// Random arm poses (within the joint limits, many close to the arena or in it) in every
+    /// arena, bare, with the object placed and with it held: the smallest gap, the gap without
+    /// the fingers, the crowding and `keeps` are what the exhaustive computation gives.
+    #[test]
+    fn skipping_far_solids_changes_no_answer() {
+        let mut rng = Mt19937::init_genrand(7);
+        let mut touching = 0;
+        for robot in Robot::all() {
+            let model = robot_model(robot);
+            for objective in Objective::all() {
+                for obstacle in Obstacle::all() {
+                    let bare = Clearance::new(model, objective, obstacle);
+                    let object = Isometry3::translation(-0.05, -0.25, 0.85);
+                    let q0: [f64; ARM_DOF] = std::array::from_fn(|j| 0.3 * j as f64 - 0.6);
+                    let variants = [
+                        bare.with_object(Object::Dumbbell, &object),
+                        bare.holding(model, &q0, Object::Plate, &object),
+                        bare,
+                    ];
+                    for c in &variants {
+                        for _ in 0..12 {
+                            let q: [f64; ARM_DOF] = std::array::from_fn(|j| {
+                                let (lo, hi) = model.joints[j].limits.unwrap_or((-3.0, 3.0));
+                                lo + (hi - lo) * rng.random_sample()
+                            });
+                            let gaps = exhaustive(c, model, &q);
+                            let smallest = gaps.iter().copied().fold(f64::INFINITY, f64::min);
+                            touching += usize::from(smallest < 0.0);
+                            assert_eq!(c.at(model, &q).to_bits(), smallest.to_bits());
+                            let arm = gaps
+                                .iter()
+                                .zip(&c.spheres)
+                                .filter(|(_, s)| !s.finger)
+                                .map(|(g, _)| *g)
+                                .fold(f64::INFINITY, f64::min);
+                            assert_eq!(c.without_fingers(model, &q).to_bits(), arm.to_bits());
+                            for margin in [0.02, 0.1] {
+                                let crowding: f64 = gaps
+                                    .iter()
+                                    .zip(&c.spheres)
+                                    .filter(|(_, s)| s.swings)
+                                    .map(|(g, _)| (margin - g).max(0.0).powi(2))
+                                    .sum();
+                                let pruned = c.crowding(model, &q, margin);
+                                assert_eq!(pruned.to_bits(), crowding.to_bits());
+                            }
+                            for least in [-0.02, 0.0, smallest, 0.01, 0.08] {
+                                assert_eq!(c.keeps(model, &q, least), smallest >= least);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Both sides of the answers were exercised.
+        assert!(
+            touching > 50 && touching < 1400,
+            "{touching} of 1536 poses touch"
+        );
+    }
 }

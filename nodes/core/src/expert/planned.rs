@@ -524,7 +524,7 @@ impl PlannedExpert {
             let mut starts = pad_ik_solutions(model, &q, pad_front, turn * orientation);
             starts.truncate(3);
             for start in starts {
-                if carrying.at(model, &start) < LEAST_END_CLEARANCE {
+                if !carrying.keeps(model, &start, LEAST_END_CLEARANCE) {
                     continue;
                 }
                 let Some(slide) = line(model, start, pad_front, pad_inside, turn * orientation)
@@ -532,12 +532,12 @@ impl PlannedExpert {
                     continue;
                 };
                 let end = *slide.last().expect("a point");
-                if carrying.at(model, &end) >= LEAST_END_CLEARANCE {
+                if carrying.keeps(model, &end, LEAST_END_CLEARANCE) {
                     insides.push((joint_distance(&q, &end), end));
                 }
                 if slide
                     .iter()
-                    .any(|c| carrying.at(model, c) < LEAST_END_CLEARANCE)
+                    .any(|c| !carrying.keeps(model, c, LEAST_END_CLEARANCE))
                 {
                     continue;
                 }
@@ -848,7 +848,7 @@ impl PlannedExpert {
         let least = MIN_CLEARANCE
             .min(clearance.at(model, &from) - 1e-3)
             .min(clearance.at(model, &to) - 1e-3);
-        let free = |c: &Joints| clearance.at(model, c) >= least;
+        let free = |c: &Joints| clearance.keeps(model, c, least);
         let space = Space {
             limits: limits(model),
             free: &free,

@@ -1,0 +1,122 @@
+//! A fingerprint of the planned expert's episodes, bit for bit, and the time it spent choosing
+//! its actions: for each task and seed, every action's 8 numbers hashed by their bits. A change
+//! meant to make the expert faster without changing what it does (its clearance checks, its
+//! kinematics) must leave every digest as it was; the time says what it gained.
+//!
+//! ```text
+//! cargo run --profile session -p composuite_core --example planned_digest -- [--seeds N] [--threads T] [TASK...]
+//! ```
+//! Default: every one of the 256 tasks, seed 0, on all cores. Prints one line per episode
+//! (sorted), then the digest of all of them and the expert's total and median time.
+
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use composuite_core::env::{Action, Env, EnvConfig};
+use composuite_core::expert::PlannedExpert;
+use composuite_core::{TaskSpec, all_tasks};
+
+/// FNV-1a over the bytes of 64-bit words.
+struct Digest(u64);
+
+impl Digest {
+    fn new() -> Digest {
+        Digest(0xcbf2_9ce4_8422_2325)
+    }
+
+    fn add(&mut self, x: u64) {
+        for byte in x.to_le_bytes() {
+            self.0 = (self.0 ^ byte as u64).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+}
+
+/// One episode: the digest of its actions, whether it succeeded, the expert's seconds.
+fn run(task: TaskSpec, seed: u64) -> (u64, bool, f64) {
+    let mut env = Env::new(task, EnvConfig::default());
+    env.reset(seed).expect("reset");
+    let mut expert = PlannedExpert::new(task);
+    let mut digest = Digest::new();
+    let (mut success, mut seconds) = (false, 0.0);
+    while env.ended().is_none() {
+        let started = std::time::Instant::now();
+        let action = expert.act(&env);
+        seconds += started.elapsed().as_secs_f64();
+        match action {
+            Action::Reference(a) => a.iter().for_each(|x| digest.add(x.to_bits())),
+            other => panic!("the planned expert acted with {other:?}"),
+        }
+        success |= env.step(&action).expect("step").info.success;
+    }
+    digest.add(success as u64);
+    (digest.0, success, seconds)
+}
+
+fn main() {
+    let mut seeds = 1u64;
+    let mut threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut names = Vec::new();
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        let mut value = |flag: &str| -> u64 {
+            let v = args
+                .next()
+                .unwrap_or_else(|| panic!("{flag} needs a number"));
+            v.parse()
+                .unwrap_or_else(|_| panic!("{flag} {v}: not a number"))
+        };
+        match arg.as_str() {
+            "--seeds" => seeds = value("--seeds"),
+            "--threads" => threads = value("--threads") as usize,
+            _ => names.push(arg),
+        }
+    }
+    let tasks: Vec<TaskSpec> = if names.is_empty() {
+        all_tasks()
+    } else {
+        names
+            .iter()
+            .map(|n| n.parse().unwrap_or_else(|e| panic!("{n}: {e}")))
+            .collect()
+    };
+    let jobs: Vec<(TaskSpec, u64)> = tasks
+        .iter()
+        .flat_map(|&t| (0..seeds).map(move |s| (t, s)))
+        .collect();
+    let next = AtomicUsize::new(0);
+    let results = Mutex::new(Vec::new());
+    let started = std::time::Instant::now();
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            scope.spawn(|| {
+                while let Some(&(task, seed)) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let (digest, success, seconds) = run(task, seed);
+                    let line = format!("{task} seed {seed}: {digest:016x} success {success}");
+                    results
+                        .lock()
+                        .unwrap()
+                        .push((line, digest, success, seconds));
+                }
+            });
+        }
+    });
+    let mut results = results.into_inner().unwrap();
+    results.sort_by(|a, b| a.0.cmp(&b.0));
+    let mut all = Digest::new();
+    for (line, digest, _, _) in &results {
+        println!("{line}");
+        all.add(*digest);
+    }
+    let mut times: Vec<f64> = results.iter().map(|r| r.3).collect();
+    times.sort_by(f64::total_cmp);
+    let successes = results.iter().filter(|r| r.2).count();
+    println!(
+        "{} episodes, {successes} successes, digest {:016x}; expert time total {:.1} s, median {:.0} ms, max {:.0} ms; wall {:.1} s",
+        results.len(),
+        all.0,
+        times.iter().sum::<f64>(),
+        1e3 * times[times.len() / 2],
+        1e3 * times[times.len() - 1],
+        started.elapsed().as_secs_f64()
+    );
+}
