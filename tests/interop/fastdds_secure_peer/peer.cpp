@@ -37,6 +37,7 @@
 #include <map>
 #include <memory>
 #include <regex>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -311,6 +312,7 @@ std::string json_str(const std::string& s) {  // names and messages here are pla
 }
 
 [[noreturn]] void fail(const std::string& why) {
+  Log::Flush();  // Fast DDS logs from a thread of its own: its reason first
   std::fprintf(stderr, "peer: FAILED: %s\n", why.c_str());
   std::fflush(stderr);
   std::_Exit(1);  // skip destructors: a half-made participant may block in its teardown
@@ -325,6 +327,7 @@ struct Args {
   int steps = 0;
   double expect_no_suite = 0;
   bool verbose = false;
+  bool second_reader = false;
 };
 
 Args parse(int argc, char** argv) {
@@ -342,6 +345,7 @@ Args parse(int argc, char** argv) {
     else if (k == "--steps") a.steps = std::stoi(value());
     else if (k == "--expect-no-suite") a.expect_no_suite = std::stod(value());
     else if (k == "--verbose") a.verbose = true;
+    else if (k == "--second-observation-reader") a.second_reader = true;
     else fail("unknown argument " + k);
   }
   if (a.ns.empty() || a.ns[0] != '/') fail("--namespace must be a fully qualified name");
@@ -384,6 +388,7 @@ struct Endpoints {
   Publisher* publisher;
   Subscriber* subscriber;
   std::map<std::string, TypeSupport> types;
+  std::map<std::string, Topic*> topics;
 
   Topic* topic(const std::string& name, const std::string& type) {
     if (!types.count(type)) {
@@ -391,9 +396,10 @@ struct Endpoints {
       if (types[type].register_type(participant) != ReturnCode_t::RETCODE_OK)
         fail("register_type " + type);
     }
+    if (topics.count(name)) return topics[name];  // one Topic per name and participant
     Topic* t = participant->create_topic(name, type, TOPIC_QOS_DEFAULT);
     if (t == nullptr) fail("create_topic " + name);
-    return t;
+    return topics[name] = t;
   }
   // ROS's default QoS (and rmw_qos_profile_services_default): reliable, volatile, keep last 10.
   DataWriter* writer(const std::string& name, const std::string& type) {
@@ -438,8 +444,13 @@ int main(int argc, char** argv) {
     Log::SetVerbosity(Log::Kind::Warning);
   }
   auto* participant = make_participant(a);
+  {  // the suite's DDS logs name remote participants by GUID prefix: say which one is ours
+    std::ostringstream guid;
+    guid << participant->guid().guidPrefix;
+    std::fprintf(stderr, "peer: participant %s\n", guid.str().c_str());
+  }
   Endpoints e{participant, participant->create_publisher(PUBLISHER_QOS_DEFAULT),
-              participant->create_subscriber(SUBSCRIBER_QOS_DEFAULT), {}};
+              participant->create_subscriber(SUBSCRIBER_QOS_DEFAULT), {}, {}};
   const std::string js_type = "sensor_msgs::msg::dds_::JointState_";
   DataWriter* command = e.writer("rt" + a.ns + "/joint_command", js_type);
   DataReader* states = e.reader("rt" + a.ns + "/joint_states", js_type);
@@ -447,6 +458,13 @@ int main(int argc, char** argv) {
       e.reader("rt" + a.ns + "/observation", "composuite_msgs::msg::dds_::Observation_");
   DataReader* rewards =
       e.reader("rt" + a.ns + "/reward", "composuite_msgs::msg::dds_::StagedReward_");
+  // A second subscription to the same topic in this participant, as a ROS node with two
+  // subscriptions (or two nodes of one context) has: the report says what it received.
+  DataReader* observations2 =
+      a.second_reader
+          ? e.reader("rt" + a.ns + "/observation", "composuite_msgs::msg::dds_::Observation_")
+          : nullptr;
+  size_t second_reader_samples = 0;
   DataWriter* request =
       e.writer("rq" + a.ns + "/resetRequest", "composuite_msgs::srv::dds_::Reset_Request_");
   DataReader* reply =
@@ -477,6 +495,8 @@ int main(int argc, char** argv) {
       auto o = read_observation(in);
       obs[{o.episode, o.step}] = o;
     });
+    if (observations2 != nullptr)
+      each(observations2, [&](CdrIn& in) { read_observation(in); ++second_reader_samples; });
     each(rewards, [&](CdrIn& in) {
       auto r = read_reward(in);
       rew[{r.episode, r.step}] = r;
@@ -511,6 +531,7 @@ int main(int argc, char** argv) {
     std::printf("{\"matched\":%d,\"observations\":%zu,\"joint_states\":%zu}\n", matched(),
                 obs.size(), js.size());
     std::fflush(stdout);
+    Log::Flush();
     std::_Exit(matched() == 0 && obs.empty() && js.empty() ? 0 : 1);
   }
 
@@ -607,6 +628,8 @@ int main(int argc, char** argv) {
     answers = o.stamp;
   }
   std::fprintf(stderr, "peer: episode of %d steps done\n", a.steps);
+  if (observations2 != nullptr)
+    std::printf("{\"second_reader_observations\":%zu}\n", second_reader_samples);
   std::fflush(stderr);
   // Leave the graph cleanly so the suite sees us go rather than time out.
   participant->delete_contained_entities();
