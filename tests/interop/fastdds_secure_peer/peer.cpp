@@ -8,11 +8,13 @@
 // hex of their little-endian bytes, so the test compares bits, not decimal text).
 //
 //   fastdds_secure_peer --domain D --namespace /ns --seed S --steps N [--enclave DIR]
-//                       [--expect-no-suite SECONDS] [--verbose]
+//                       [--expect-no-suite SECONDS] [--second-observation-reader] [--verbose]
 //
 // Without --enclave the participant has no security at all. --expect-no-suite: succeed (exit
 // 0) only if nothing of the suite matches within SECONDS — what a peer the secured suite must
-// refuse should see. Exit 1 on any failure, with the reason on stderr.
+// refuse should see. --second-observation-reader: a second reader of `observation` in the same
+// participant, its count of samples reported at the end. Exit 1 on any failure, with the
+// reason on stderr.
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
