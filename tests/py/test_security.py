@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -143,6 +144,51 @@ def test_enforce_stops_a_node_whose_enclave_is_missing_and_permissive_warns(keys
         process.send_signal(signal.SIGINT)
         process.wait(timeout=15)
     assert "joining WITHOUT security" in log.read_text()
+
+
+def spoiled_enclave(keystore, domain: int, tmp_path, how: str):
+    """A copy of the keystore whose `/` enclave is spoiled `how`: a signed document changed, an
+    identity certificate from another keystore, or a certificate that has expired."""
+    spoiled = tmp_path / f"keystore-{how}"
+    shutil.copytree(keystore, spoiled, symlinks=True)
+    enclave = spoiled / "enclaves"
+    if how in ("governance", "permissions"):
+        document = enclave / f"{how}.p7s"
+        document.write_text(document.read_text().replace("<domains>", "<domains> ", 1))
+    elif how == "foreign":
+        other = tmp_path / "other-keystore"
+        for args in (["create-keystore", str(other)], ["create-enclave", str(other), "/"]):
+            subprocess.run([str(COMPOSUITE), "security", *args, "--domain-id", str(domain)],
+                           check=True, capture_output=True)
+        for name in ("cert.pem", "key.pem"):
+            (enclave / name).write_bytes((other / "enclaves" / name).read_bytes())
+    else:
+        for name in ("cert.pem", "key.pem", "permissions.xml", "permissions.p7s"):
+            (enclave / name).unlink()
+        subprocess.run([str(COMPOSUITE), "security", "create-enclave", str(spoiled), "/",
+                        "--domain-id", str(domain), "--days", "0"],
+                       check=True, capture_output=True)
+    return spoiled
+
+
+@pytest.mark.parametrize("how,says", [
+    ("governance", "governance.p7s: its signature does not verify"),
+    ("permissions", "permissions.p7s: its signature does not verify"),
+    ("foreign", "cert.pem is not signed by this keystore's identity CA"),
+    ("expired", "cert.pem expired on"),
+])
+@pytest.mark.parametrize("strategy", ["Enforce", "Permissive"])
+def test_a_node_with_spoiled_security_files_stops_saying_which_and_why(keystore, domain, tmp_path,
+                                                                      how, says, strategy):
+    """Files that are there but unusable stop the node at start-up under either strategy (the
+    permissive one forgives only missing files), naming the file and what is wrong with it."""
+    spoiled = spoiled_enclave(keystore, domain, tmp_path, how)
+    env = switches(spoiled, domain, ROS_SECURITY_STRATEGY=strategy)
+    done = subprocess.run([str(COMPOSUITE), "node", "sim", "--ros-args", "-r", "__ns:=/spoiled"],
+                          env=env, capture_output=True, text=True, timeout=30)
+    assert done.returncode == 2, done.stderr[-3000:]
+    assert f"SECURITY ERROR: enclave /: {spoiled}/enclaves/{says}" in done.stderr, done.stderr
+    assert "/spoiled/sim up" not in done.stderr
 
 
 def test_a_participant_without_credentials_sees_none_of_the_suite(keystore, domain, tmp_path):

@@ -321,3 +321,60 @@ fn bad_input_is_refused_saying_what_is_valid() {
     );
     assert!(!root.join("k3").exists());
 }
+
+/// What a node checks before it joins (`verify_enclave`): an enclave as made passes; a changed
+/// governance or permissions document, an identity from another keystore and an expired
+/// certificate each fail, naming the file and what is wrong with it.
+#[test]
+fn a_node_refuses_changed_foreign_and_expired_enclaves_saying_which_file() {
+    use composuite_ros::shared::security::verify_enclave;
+    let root = scratch("verify");
+    let make = |name: &str, days: &str| {
+        let ks = root.join(name);
+        assert!(
+            composuite(&["security", "create-keystore", path(&ks)])
+                .status
+                .success()
+        );
+        let out = composuite(&["security", "create-enclave", path(&ks), "/", "--days", days]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        ks.join("enclaves")
+    };
+    let good = make("good", "30");
+    assert_eq!(verify_enclave(&good), Ok(()));
+
+    for (document, tag) in [
+        ("governance.p7s", "enable_join_access_control"),
+        ("permissions.p7s", "subject_name"),
+    ] {
+        let ks = make(&format!("changed-{document}"), "30");
+        let file = ks.join(document);
+        let text = fs::read_to_string(&file).unwrap();
+        let opening = format!("<{tag}>");
+        assert!(text.contains(&opening), "{document} has {opening}");
+        // One character of the signed text changed.
+        let changed = text.replacen(&opening, &format!("{opening} "), 1);
+        fs::write(&file, changed).unwrap();
+        let err = verify_enclave(&ks).unwrap_err();
+        assert!(
+            err.contains(document) && err.contains("signature does not verify"),
+            "{err}"
+        );
+    }
+
+    let foreign = make("foreign", "30");
+    let other = make("other", "30");
+    for file in ["cert.pem", "key.pem"] {
+        fs::copy(other.join(file), foreign.join(file)).unwrap();
+    }
+    let err = verify_enclave(&foreign).unwrap_err();
+    assert!(
+        err.contains("cert.pem is not signed by this keystore's identity CA"),
+        "{err}"
+    );
+
+    // Valid for 0 days from a day back (the tool's allowance for lagging clocks): expired.
+    let expired = make("expired", "0");
+    let err = verify_enclave(&expired).unwrap_err();
+    assert!(err.contains("cert.pem expired on"), "{err}");
+}

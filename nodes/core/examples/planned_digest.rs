@@ -7,7 +7,8 @@
 //! cargo run --profile session -p composuite_core --example planned_digest -- [--seeds N] [--threads T] [TASK...]
 //! ```
 //! Default: every one of the 256 tasks, seed 0, on all cores. Prints one line per episode
-//! (sorted), then the digest of all of them and the expert's total and median time.
+//! (sorted), then the digest of all of them and the expert's total and median time; the five
+//! episodes that took longest (expert and physics) go to standard error.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -90,12 +91,14 @@ fn main() {
         for _ in 0..threads.max(1) {
             scope.spawn(|| {
                 while let Some(&(task, seed)) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let started = std::time::Instant::now();
                     let (digest, success, seconds) = run(task, seed);
+                    let wall = started.elapsed().as_secs_f64();
                     let line = format!("{task} seed {seed}: {digest:016x} success {success}");
                     results
                         .lock()
                         .unwrap()
-                        .push((line, digest, success, seconds));
+                        .push((line, digest, success, seconds, wall));
                 }
             });
         }
@@ -103,9 +106,15 @@ fn main() {
     let mut results = results.into_inner().unwrap();
     results.sort_by(|a, b| a.0.cmp(&b.0));
     let mut all = Digest::new();
-    for (line, digest, _, _) in &results {
+    for (line, digest, _, _, _) in &results {
         println!("{line}");
         all.add(*digest);
+    }
+    // The episodes that took longest, whole (the expert and the physics).
+    let mut slowest: Vec<_> = results.iter().collect();
+    slowest.sort_by(|a, b| b.4.total_cmp(&a.4));
+    for r in slowest.iter().take(5) {
+        eprintln!("slow: {} — {:.1} s, expert {:.1} s", r.0, r.4, r.3);
     }
     let mut times: Vec<f64> = results.iter().map(|r| r.3).collect();
     times.sort_by(f64::total_cmp);

@@ -185,8 +185,13 @@ fn write(path: &Path, contents: &[u8], private: bool) -> Result<(), String> {
     Ok(())
 }
 
-/// A relative symbolic link at `link` to `target` (relative to the link's folder).
+/// A relative symbolic link at `link` to `target` (relative to the link's folder); one that
+/// is there already and points there is kept (an enclave made again after its own files were
+/// removed, as the refusal to overwrite them says to do).
 fn link(target: &str, link: &Path) -> Result<(), String> {
+    if fs::read_link(link).is_ok_and(|there| there == Path::new(target)) {
+        return Ok(());
+    }
     std::os::unix::fs::symlink(target, link).map_err(|e| io_error("link", link, e))
 }
 

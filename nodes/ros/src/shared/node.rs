@@ -693,7 +693,12 @@ pub fn new_context(
         security::Join::Plain {
             warning: Some(warning),
         } => eprintln!("[WARN] security: {warning}"),
-        security::Join::Secure { dir, .. } => {
+        security::Join::Secure { dir, enclave } => {
+            // Files that are there but unusable stop the node under either strategy (the
+            // permissive one only forgives missing files, as rcl's does).
+            security::verify_enclave(&dir).map_err(|problem| {
+                StartError(format!("SECURITY ERROR: enclave {enclave}: {problem}"))
+            })?;
             // The plugins take unencrypted keys only: no password.
             let files =
                 DomainParticipantSecurityConfigFiles::with_ros_default_names(dir, String::new());
