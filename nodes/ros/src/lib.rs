@@ -10,12 +10,14 @@
 //!   what, entities, worlds);
 //! - [`container`]: many environments' nodes in one process on one participant;
 //! - [`nodes`]: the nodes by kind (specs and mains, for the binaries and `composuite launch`);
+//! - [`grants`]: the DDS topics each node (and an agent) needs, for security permissions;
 //! - [`shared`]: start-up, parameters, logging, names, QoS, message conversions;
 //! - [`bag`]: rosbag2 bags in MCAP (writer, reader, reindex), for the recorder and the CLI.
 #![warn(missing_docs)]
 
 pub mod bag;
 pub mod container;
+pub mod grants;
 pub mod nodes;
 pub mod player;
 pub mod recorder;

@@ -121,6 +121,10 @@ pub(super) fn node_arguments(
     if let Some(enclave) = &args.enclave {
         out.extend(["--enclave".into(), enclave.clone()]);
     }
+    if let Some(prefix) = &args.node_enclaves {
+        let prefix = prefix.trim_end_matches('/');
+        out.extend(["--enclave".into(), format!("{prefix}/{}", kind.name())]);
+    }
     out
 }
 
@@ -237,6 +241,12 @@ mod tests {
             sim.windows(2)
                 .any(|w| w == ["--enclave", "/composuite/train"])
         );
+        let own = parse(&["--node-enclaves", "/composuite/"]);
+        for kind in [NodeKind::Sim, NodeKind::Reward] {
+            let argv = node_arguments(&own, kind, "/", 0);
+            let wanted = format!("/composuite/{}", kind.name());
+            assert!(argv.windows(2).any(|w| w == ["--enclave", wanted.as_str()]));
+        }
         for range in split_environments(parent.envs, parent.processes) {
             let argv = parent.container_process_argv(&range);
             assert_eq!(argv[0], "launch");

@@ -107,6 +107,12 @@ pub struct LaunchArgs {
     /// [default: /]
     #[arg(long, value_name = "NAME")]
     enclave: Option<String>,
+    /// Every node in a security enclave of its own, PREFIX/<node> (PREFIX/sim,
+    /// PREFIX/task_manager, PREFIX/reward, PREFIX/recorder), e.g. made with `composuite
+    /// security create-enclave KEYSTORE PREFIX/sim --grant sim --namespace NS`. Needs node
+    /// processes (one environment, or --isolate): a composed process is one participant.
+    #[arg(long, value_name = "PREFIX", conflicts_with = "enclave")]
+    node_enclaves: Option<String>,
     /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
     #[arg(long)]
     duration: Option<f64>,
@@ -194,6 +200,7 @@ impl LaunchArgs {
             params_file: None,
             log_level: log_level.into(),
             enclave: None,
+            node_enclaves: None,
             duration: None,
             respawn: 0,
             respawn_delay: 1.0,

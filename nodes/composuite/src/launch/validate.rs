@@ -35,6 +35,21 @@ pub(super) fn validate(args: &LaunchArgs) -> Result<(), String> {
             "--enclave {enclave} is invalid; it must be a fully qualified name, e.g. /composuite/sim"
         ));
     }
+    if let Some(prefix) = &args.node_enclaves {
+        if !is_fully_qualified_name(prefix) {
+            return Err(format!(
+                "--node-enclaves {prefix} is invalid; it must be a fully qualified name, e.g. \
+                 /composuite"
+            ));
+        }
+        if args.composed() {
+            return Err(
+                "--node-enclaves needs node processes (one environment, or --isolate): \
+                 a composed process is one DDS participant, in one enclave (--enclave)"
+                    .into(),
+            );
+        }
+    }
     if !(1..=100).contains(&args.envs) {
         return Err(format!("--envs {} is invalid; valid: 1 to 100", args.envs));
     }
@@ -144,5 +159,23 @@ mod tests {
         assert!(refused(&["--envs", "4", "--threads", "0"]).contains("--threads 0 is invalid"));
         assert!(validate(&parse(&["--envs", "4", "--threads", "1"])).is_ok());
         assert!(refused(&["--envs", "4", "--isolate", "--threads", "2"]).contains("composed"));
+    }
+
+    #[test]
+    fn node_enclaves_need_node_processes_and_a_full_name() {
+        let refused = |argv: &[&str]| validate(&parse(argv)).unwrap_err();
+        assert!(refused(&["--envs", "2", "--node-enclaves", "/c"]).contains("node processes"));
+        assert!(refused(&["--node-enclaves", "c"]).contains("--node-enclaves c is invalid"));
+        assert!(validate(&parse(&["--node-enclaves", "/c"])).is_ok());
+        assert!(
+            validate(&parse(&[
+                "--envs",
+                "2",
+                "--isolate",
+                "--node-enclaves",
+                "/c"
+            ]))
+            .is_ok()
+        );
     }
 }

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
 
+use composuite_ros::grants::{self, Role};
 use composuite_ros::shared::environment::MAX_DOMAIN_ID;
 use composuite_ros::shared::ros_args::is_fully_qualified_name;
 use composuite_ros::shared::security::enclave_dir;
@@ -79,6 +80,18 @@ enum SecurityCommand {
         /// With --allow-publish: the DDS topics it may subscribe to.
         #[arg(long, num_args = 1.., value_name = "TOPIC", requires = "allow_publish")]
         allow_subscribe: Vec<String>,
+        /// Instead of the default grant: exactly what these roles need in the environments of
+        /// --namespace — a node of the suite (sim, task_manager, reward, recorder), `player`
+        /// (`composuite play`), or `agent` (commands and resets the environment and reads all
+        /// it publishes, but publishes none of the suite's outputs). Several roles add up (the
+        /// enclave of a composed process, one participant for all its nodes: sim task_manager
+        /// reward).
+        #[arg(long, num_args = 1.., value_name = "ROLE", conflicts_with = "allow_publish")]
+        grant: Vec<String>,
+        /// With --grant: the environments' namespaces (wildcards allowed, e.g. '/train/env_*';
+        /// default: the root namespace `/`).
+        #[arg(long, num_args = 1.., value_name = "NS", requires = "grant")]
+        namespace: Vec<String>,
     },
     /// List the keystore's enclaves, one per line.
     ListEnclaves {
@@ -113,8 +126,12 @@ pub fn run(args: &SecurityArgs) -> Result<(), String> {
             days,
             allow_publish,
             allow_subscribe,
+            grant: roles,
+            namespace,
         } => {
-            let grant = if allow_publish.is_empty() {
+            let grant = if !roles.is_empty() {
+                role_grant(roles, namespace)?
+            } else if allow_publish.is_empty() {
                 Grant::ros_default()
             } else {
                 Grant::of(allow_publish, allow_subscribe)
@@ -130,6 +147,44 @@ pub fn run(args: &SecurityArgs) -> Result<(), String> {
             Ok(())
         }
     }
+}
+
+/// What `roles` need in the environments of `namespaces` (the root one if none), each topic
+/// once, in the order first needed.
+fn role_grant(roles: &[String], namespaces: &[String]) -> Result<Grant, String> {
+    let root = ["/".to_string()];
+    let namespaces = if namespaces.is_empty() {
+        &root[..]
+    } else {
+        namespaces
+    };
+    if let Some(bad) = namespaces.iter().find(|n| !n.starts_with('/')) {
+        return Err(format!(
+            "--namespace {bad} is invalid; it must be absolute, e.g. /env_00 or '/train/env_*'"
+        ));
+    }
+    let (mut publish, mut subscribe) = (Vec::new(), Vec::new());
+    for name in roles {
+        let role = Role::parse(name).ok_or_else(|| {
+            format!(
+                "--grant {name}: unknown role; valid: {}",
+                Role::NAMES.join(", ")
+            )
+        })?;
+        for namespace in namespaces {
+            let topics = grants::grant(role, namespace);
+            publish.extend(topics.publish);
+            subscribe.extend(topics.subscribe);
+        }
+    }
+    let once = |topics: Vec<String>| {
+        let mut seen = std::collections::HashSet::new();
+        topics
+            .into_iter()
+            .filter(|t| seen.insert(t.clone()))
+            .collect::<Vec<_>>()
+    };
+    Ok(Grant::of(&once(publish), &once(subscribe)))
 }
 
 /// The domain id given, else `ROS_DOMAIN_ID`, else 0 (what `ros2 security` does).
