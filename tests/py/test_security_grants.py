@@ -27,6 +27,25 @@ RECORDED_NS = "/recorded"
 SEED = 5
 STEPS = 12
 NODES = ("task_manager", "sim", "reward")
+# An sros2 policy (format 0.2.0) granting the Fast DDS agent exactly the endpoints it has.
+POLICY = f"""<?xml version="1.0" encoding="UTF-8"?>
+<policy version="0.2.0" xmlns:xi="http://www.w3.org/2001/XInclude">
+  <enclaves>
+    <enclave path="/from_policy">
+      <profiles>
+        <profile ns="{NS}" node="fastdds_agent">
+          <xi:include href="common/node.xml" xpointer="xpointer(/profile/*)"/>
+          <topics publish="ALLOW"><topic>joint_command</topic></topics>
+          <topics subscribe="ALLOW">
+            <topic>joint_states</topic><topic>observation</topic><topic>reward</topic>
+          </topics>
+          <services request="ALLOW"><service>reset</service></services>
+        </profile>
+      </profiles>
+    </enclave>
+  </enclaves>
+</policy>
+"""
 RECORDED = ("observation", "reward", "scene")
 
 
@@ -54,6 +73,9 @@ def keystore(tmp_path_factory, domain):
            domain=domain)
     create("create-enclave", str(ks), "/elsewhere", "--grant", "agent", "--namespace",
            "/elsewhere", domain=domain)
+    policy = ks.parent / "policy.xml"
+    policy.write_text(POLICY)
+    create("create-enclave", str(ks), "/from_policy", "--policy", str(policy), domain=domain)
     return ks
 
 
@@ -142,3 +164,11 @@ def test_an_agent_of_another_environment_cannot_command_this_one(peer, suite, ke
     assert done.returncode == 1
     assert f"not allowed to create a DataWriter to topic rt{NS}/joint_command" in done.stderr, \
         done.stderr[-3000:]
+
+
+def test_an_agent_in_an_enclave_made_from_an_sros2_policy_plays(peer, suite, keystore, domain):
+    """create-enclave --policy: the permissions an sros2 policy gives the agent's endpoints
+    (relative names in the profile's namespace, a service it calls) let it play."""
+    done = run_agent(peer, domain, keystore / "enclaves" / "from_policy", 3)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert [json.loads(line).get("step") for line in done.stdout.splitlines()][1:] == [0, 1, 2, 3]

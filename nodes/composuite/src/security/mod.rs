@@ -4,6 +4,7 @@
 
 mod documents;
 mod pki;
+mod policy;
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -92,6 +93,10 @@ enum SecurityCommand {
         /// default: the root namespace `/`).
         #[arg(long, num_args = 1.., value_name = "NS", requires = "grant")]
         namespace: Vec<String>,
+        /// Instead of the default grant: what an sros2 policy file (format 0.2.0, as `ros2
+        /// security create_enclave --policy` reads) gives this enclave.
+        #[arg(long, value_name = "FILE", conflicts_with_all = ["allow_publish", "grant"])]
+        policy: Option<PathBuf>,
     },
     /// List the keystore's enclaves, one per line.
     ListEnclaves {
@@ -128,8 +133,13 @@ pub fn run(args: &SecurityArgs) -> Result<(), String> {
             allow_subscribe,
             grant: roles,
             namespace,
+            policy,
         } => {
-            let grant = if !roles.is_empty() {
+            let grant = if let Some(file) = policy {
+                let xml = fs::read_to_string(file)
+                    .map_err(|e| format!("--policy {}: {e}", file.display()))?;
+                policy::grant_from_policy(&xml, &file.display().to_string(), enclave)?
+            } else if !roles.is_empty() {
                 role_grant(roles, namespace)?
             } else if allow_publish.is_empty() {
                 Grant::ros_default()
