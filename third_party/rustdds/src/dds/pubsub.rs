@@ -562,10 +562,15 @@ impl InnerPublisher {
     #[cfg(feature = "security")]
     if let Some(sec_handle) = self.security_plugins_handle.as_ref() {
       // Security is enabled.
-      // Check are we allowed to create the DataWriter from Access control
+      // Check are we allowed to create the DataWriter from Access control.
+      // (CompoSuite-ROS patch: the domain id, which locks the participant, is read before the
+      // security plugins are locked. As an argument it was read with the plugins' lock held,
+      // while DomainParticipant::create_topic holds the participant's lock and then takes the
+      // plugins': two threads creating a topic and a writer at once deadlocked for good.)
+      let domain_id = dp.domain_id();
       let check_res = sec_handle.get_plugins().check_create_datawriter(
         guid.prefix,
-        dp.domain_id(),
+        domain_id,
         topic.name(),
         &writer_qos,
       );
@@ -1177,10 +1182,13 @@ impl InnerSubscriber {
     #[cfg(feature = "security")]
     if let Some(sec_handle) = self.security_plugins_handle.as_ref() {
       // Security is enabled.
-      // Check are we allowed to create the DataReader from Access control
+      // Check are we allowed to create the DataReader from Access control.
+      // (CompoSuite-ROS patch: the domain id is read before the plugins are locked, as for a
+      // DataWriter above.)
+      let domain_id = dp.domain_id();
       let check_res = sec_handle.get_plugins().check_create_datareader(
         reader_guid.prefix,
-        dp.domain_id(),
+        domain_id,
         topic.name(),
         &qos,
       );

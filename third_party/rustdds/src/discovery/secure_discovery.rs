@@ -107,7 +107,11 @@ pub(crate) struct SecureDiscovery {
 
   // In the key, first GUID is local endpoint's, second is remote endpoint's
   cached_received_key_exchange_messages: HashMap<(GUID, GUID), ParticipantVolatileMessageSecure>,
-  user_data_endpoints_with_keys_already_sent_to: HashSet<GUID>,
+  // (CompoSuite-ROS patch: by (local endpoint, remote endpoint), first GUID the local one's. By
+  // the remote one's alone, a remote endpoint matched with two local ones — two readers of a
+  // writer of our own participant, or two local writers of a topic and one remote reader — got
+  // the keys of the first only.)
+  user_data_endpoints_with_keys_already_sent_to: HashSet<(GUID, GUID)>,
 
   // A set for keeping track which remote readers are relay-only
   relay_only_remote_readers: HashSet<GUID>,
@@ -2372,7 +2376,7 @@ impl SecureDiscovery {
     // See if we have already sent our keys. Do nothing if so.
     let we_have_sent_ours = self
       .user_data_endpoints_with_keys_already_sent_to
-      .contains(&remote_endpoint_guid);
+      .contains(&(local_endpoint_guid, remote_endpoint_guid));
     if we_have_sent_ours {
       return;
     }
@@ -2421,7 +2425,7 @@ impl SecureDiscovery {
       // Mark as if we have sent keys to the remote
       self
         .user_data_endpoints_with_keys_already_sent_to
-        .insert(remote_endpoint_guid);
+        .insert((local_endpoint_guid, remote_endpoint_guid));
       return;
     }
 
@@ -2451,28 +2455,53 @@ impl SecureDiscovery {
     };
 
     // Shortcut: if the remote is actually our endpoint, set tokens directly (no
-    // need to send then to the network)
+    // need to send then to the network).
+    // (CompoSuite-ROS patch: the tokens are our local endpoint's, made for the remote one, so
+    // they are set where the remote one keeps what it receives from ours: at the pair (remote as
+    // the local endpoint, ours as the remote one), as if they had come over the network. 0.15.1
+    // set them at our own endpoint's pair, so each endpoint of the participant "decoded" with
+    // its own keys and nothing passed between two endpoints of one participant. If the other
+    // endpoint has not registered ours yet, the tokens wait for it as a received message would.)
     let remote_is_us = remote_endpoint_guid.prefix == self.local_participant_guid.prefix;
     if remote_is_us {
       let set_res = if remote_is_writer {
         self
           .security_plugins
           .get_plugins()
-          .set_remote_writer_crypto_tokens(remote_endpoint_guid, local_endpoint_guid, crypto_tokens)
+          .set_remote_reader_crypto_tokens(
+            local_endpoint_guid,
+            remote_endpoint_guid,
+            crypto_tokens.clone(),
+          )
       } else {
         self
           .security_plugins
           .get_plugins()
-          .set_remote_reader_crypto_tokens(remote_endpoint_guid, local_endpoint_guid, crypto_tokens)
+          .set_remote_writer_crypto_tokens(
+            local_endpoint_guid,
+            remote_endpoint_guid,
+            crypto_tokens.clone(),
+          )
       };
 
       if let Err(e) = set_res {
-        create_security_error_and_log!(
-          "Failed to set our own crypto tokens as remote tokens: {}. Guid: {:?}",
-          e,
-          remote_endpoint_guid
+        debug!(
+          "Could not set our own crypto tokens at {remote_endpoint_guid:?} yet ({e}); stored \
+           until it registers {local_endpoint_guid:?}"
         );
-        return;
+        let vol_msg = self.new_volatile_message(
+          if remote_is_writer {
+            GMCLASSID_SECURITY_DATAREADER_CRYPTO_TOKENS
+          } else {
+            GMCLASSID_SECURITY_DATAWRITER_CRYPTO_TOKENS
+          },
+          key_exchange_writer.guid(),
+          local_endpoint_guid,
+          remote_endpoint_guid.prefix,
+          remote_endpoint_guid,
+          &crypto_tokens,
+        );
+        self.store_received_volatile_message(vol_msg);
       } else {
         debug!("Set our own crypto tokens as remote tokens. Guid: {remote_endpoint_guid:?}");
       }
@@ -2520,7 +2549,7 @@ impl SecureDiscovery {
     // Remember that we have successfully sent the keys
     self
       .user_data_endpoints_with_keys_already_sent_to
-      .insert(remote_endpoint_guid);
+      .insert((local_endpoint_guid, remote_endpoint_guid));
   }
 
   fn validate_remote_participant_permissions(

@@ -845,6 +845,7 @@ impl SecurityPlugins {
 
     let remote_reader_crypto = self.crypto.register_matched_remote_datareader(
       local_writer_crypto,
+      remote_reader_guid, // CompoSuite-ROS patch: a crypto handle per remote endpoint
       remote_participant_crypto,
       shared_secret,
       relay_only,
@@ -876,6 +877,7 @@ impl SecurityPlugins {
 
     let remote_writer_crypto = self.crypto.register_matched_remote_datawriter(
       local_reader_crypto,
+      remote_writer_guid, // CompoSuite-ROS patch: a crypto handle per remote endpoint
       remote_participant_crypto,
       shared_secret,
     )?;

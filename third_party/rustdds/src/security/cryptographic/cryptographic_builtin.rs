@@ -18,6 +18,7 @@ use crate::{
     cryptographic::{cryptographic_builtin::types::*, cryptographic_plugin::*, types::*},
     types::*,
   },
+  GUID,
 };
 use self::{builtin_key::*, key_material::*};
 
@@ -72,10 +73,12 @@ pub struct CryptographicBuiltin {
   //
   // TODO: The current session_id is just a constant. Implementing counting above requires
   // some access to shared mutable state from encryption/send operations.
-  /// For each (local datawriter (/datareader), remote participant) pair, stores
-  /// the matched remote datareader (/datawriter)
-  matched_remote_endpoint:
-    HashMap<EndpointCryptoHandle, HashMap<ParticipantCryptoHandle, EndpointCryptoHandle>>,
+  /// For each local datawriter (/datareader), the handles of the matched remote
+  /// datareaders (/datawriters) by their GUIDs. (CompoSuite-ROS patch: by the
+  /// remote endpoint's GUID; 0.15.1 kept one handle per remote participant, so a
+  /// second remote endpoint of one participant matched with the same local
+  /// endpoint was given the first one's handle and its registration failed.)
+  matched_remote_endpoint: HashMap<EndpointCryptoHandle, HashMap<GUID, EndpointCryptoHandle>>,
   ///For reverse lookups,  for each remote datawriter (/datareader), stores the
   /// matched local datareader (/datawriter)
   matched_local_endpoint: HashMap<EndpointCryptoHandle, EndpointCryptoHandle>,

@@ -7,6 +7,7 @@ use crate::{
   security::{
     access_control::types::*, authentication::types::*, cryptographic::types::*, types::*,
   },
+  GUID,
 };
 // Imports for doc references
 #[cfg(doc)]
@@ -45,9 +46,15 @@ pub trait CryptoKeyFactory: Send {
 
   /// register_matched_remote_datareader: section 8.5.1.7.4 of the Security
   /// specification (v. 1.1)
+  ///
+  /// (CompoSuite-ROS patch: with the remote DataReader's GUID, which the
+  /// specification's operation does not take, so that each remote DataReader
+  /// matched with the DataWriter gets a handle of its own, also when several
+  /// are in one participant.)
   fn register_matched_remote_datareader(
     &mut self,
     local_datawriter_crypto_handle: DatawriterCryptoHandle,
+    remote_datareader_guid: GUID,
     remote_participant_crypto_handle: ParticipantCryptoHandle,
     shared_secret: SharedSecretHandle,
     relay_only: bool,
@@ -64,9 +71,13 @@ pub trait CryptoKeyFactory: Send {
 
   /// register_matched_remote_datawriter: section 8.5.1.7.6 of the Security
   /// specification (v. 1.1)
+  ///
+  /// (CompoSuite-ROS patch: with the remote DataWriter's GUID, as
+  /// `register_matched_remote_datareader` takes the DataReader's.)
   fn register_matched_remote_datawriter(
     &mut self,
     local_datareader_crypto_handle: DatareaderCryptoHandle,
+    remote_datawriter_guid: GUID,
     remote_participant_crypto_handle: ParticipantCryptoHandle,
     shared_secret: SharedSecretHandle,
   ) -> SecurityResult<DatawriterCryptoHandle>;

@@ -20,8 +20,15 @@ impl CryptographicBuiltin {
     self.crypto_handle_counter
   }
 
+  // CompoSuite-ROS patch: the handle is looked up by the remote endpoint's GUID, so that
+  // every remote endpoint matched with a local one has its own handle (and its own
+  // receiver-specific key material, decode key material and attributes). 0.15.1 looked it up by
+  // the remote participant's handle: a second remote endpoint of one participant matched with
+  // the same local endpoint (two readers of a topic in one participant) got the first one's
+  // handle, and its registration failed on the key material already held there.
   fn get_or_generate_matched_remote_endpoint_crypto_handle(
     &mut self,
+    remote_endpoint_guid: GUID,
     remote_participant_crypto_handle: ParticipantCryptoHandle,
     local_endpoint_crypto_handle: EndpointCryptoHandle,
   ) -> EndpointCryptoHandle {
@@ -29,8 +36,8 @@ impl CryptographicBuiltin {
     if let Some(remote_endpoint_crypto_handle) = self
       .matched_remote_endpoint
       .get(&local_endpoint_crypto_handle)
-      .and_then(|remote_participant_to_remote_endpoint| {
-        remote_participant_to_remote_endpoint.get(&remote_participant_crypto_handle)
+      .and_then(|remote_guid_to_remote_endpoint| {
+        remote_guid_to_remote_endpoint.get(&remote_endpoint_guid)
       })
     {
       *remote_endpoint_crypto_handle
@@ -46,25 +53,13 @@ impl CryptographicBuiltin {
       self
         .matched_local_endpoint
         .insert(remote_endpoint_crypto_handle, local_endpoint_crypto_handle);
-      // Insert it to the HashMap corresponding to the local endpoint
-      if let Some(remote_participant_to_remote_endpoint) = self
+      // Insert it to the HashMap corresponding to the local endpoint (creating the map if it
+      // does not yet exist)
+      self
         .matched_remote_endpoint
-        .get_mut(&local_endpoint_crypto_handle)
-      {
-        remote_participant_to_remote_endpoint.insert(
-          remote_participant_crypto_handle,
-          remote_endpoint_crypto_handle,
-        );
-      } else {
-        // Create a new HashMap if one does not yet exist
-        self.matched_remote_endpoint.insert(
-          local_endpoint_crypto_handle,
-          HashMap::from([(
-            remote_participant_crypto_handle,
-            remote_endpoint_crypto_handle,
-          )]),
-        );
-      }
+        .entry(local_endpoint_crypto_handle)
+        .or_default()
+        .insert(remote_endpoint_guid, remote_endpoint_crypto_handle);
       // Return the generated handle
       remote_endpoint_crypto_handle
     }
@@ -246,19 +241,22 @@ impl CryptographicBuiltin {
       if let Some(matched_local_endpoint_crypto_handle) =
         self.matched_local_endpoint.remove(&endpoint_crypto_handle)
       {
-        if let Some(remote_participant_to_remote_endpoint) = self
+        if let Some(remote_guid_to_remote_endpoint) = self
           .matched_remote_endpoint
           .get_mut(&matched_local_endpoint_crypto_handle)
         {
-          remote_participant_to_remote_endpoint.remove(&participant_crypto_handle);
+          // (CompoSuite-ROS patch: the map is by remote GUID, see
+          // get_or_generate_matched_remote_endpoint_crypto_handle.)
+          remote_guid_to_remote_endpoint
+            .retain(|_, remote_endpoint| *remote_endpoint != endpoint_crypto_handle);
         }
       }
       // If the endpoint is local, unregister all associated remote entities as they serve no
       // purpose on their own. TODO: should we do this or just sever the association?
-      else if let Some(remote_participant_to_remote_endpoint) =
+      else if let Some(remote_guid_to_remote_endpoint) =
         self.matched_remote_endpoint.remove(&endpoint_crypto_handle)
       {
-        for remote_endpoint_crypto_handle in remote_participant_to_remote_endpoint.values() {
+        for remote_endpoint_crypto_handle in remote_guid_to_remote_endpoint.values() {
           self.unregister_endpoint(EndpointInfo {
             crypto_handle: *remote_endpoint_crypto_handle,
             kind: endpoint_info.kind.opposite(),
@@ -430,6 +428,7 @@ impl CryptoKeyFactory for CryptographicBuiltin {
   fn register_matched_remote_datareader(
     &mut self,
     local_datawriter_crypto_handle: DatawriterCryptoHandle,
+    remote_datareader_guid: GUID,
     remote_participant_crypto_handle: ParticipantCryptoHandle,
     shared_secret: SharedSecretHandle,
     _relay_only: bool,
@@ -439,10 +438,11 @@ impl CryptoKeyFactory for CryptographicBuiltin {
       .get_common_encode_key_materials(&local_datawriter_crypto_handle)
       .cloned()?;
 
-    // Find a handle for the remote datareader corresponding to the (remote
-    // participant, local datawriter) pair, or generate a new one
+    // Find a handle for the remote datareader matched with the local datawriter, or
+    // generate a new one (CompoSuite-ROS patch: by the remote datareader's GUID)
     let remote_datareader_crypto_handle = self
       .get_or_generate_matched_remote_endpoint_crypto_handle(
+        remote_datareader_guid,
         remote_participant_crypto_handle,
         local_datawriter_crypto_handle,
       );
@@ -567,6 +567,7 @@ impl CryptoKeyFactory for CryptographicBuiltin {
   fn register_matched_remote_datawriter(
     &mut self,
     local_datareader_crypto_handle: DatareaderCryptoHandle,
+    remote_datawriter_guid: GUID,
     remote_participant_crypto_handle: ParticipantCryptoHandle,
     shared_secret: SharedSecretHandle,
   ) -> SecurityResult<DatawriterCryptoHandle> {
@@ -575,10 +576,11 @@ impl CryptoKeyFactory for CryptographicBuiltin {
       .get_common_encode_key_materials(&local_datareader_crypto_handle)
       .cloned()?;
 
-    // Find a handle for the remote datawriter corresponding to the (remote
-    // participant, local datareader) pair, or generate a new one
+    // Find a handle for the remote datawriter matched with the local datareader, or
+    // generate a new one (CompoSuite-ROS patch: by the remote datawriter's GUID)
     let remote_datawriter_crypto_handle: DatareaderCryptoHandle = self
       .get_or_generate_matched_remote_endpoint_crypto_handle(
+        remote_datawriter_guid,
         remote_participant_crypto_handle,
         local_datareader_crypto_handle,
       );
@@ -696,5 +698,219 @@ impl CryptoKeyFactory for CryptographicBuiltin {
       kind: EndpointKind::DataReader,
     });
     Ok(())
+  }
+}
+
+// CompoSuite-ROS patch tests: every remote endpoint matched with a local one has a handle of its
+// own, also when several remote endpoints of one participant are matched with the same local
+// endpoint (two readers of a topic in one participant, or two writers).
+#[cfg(test)]
+mod remote_endpoint_handle_tests {
+  use super::*;
+  use crate::{
+    messages::submessages::elements::parameter_list::ParameterList,
+    security::cryptographic::cryptographic_plugin::{CryptoKeyExchange, CryptoTransform},
+    structure::guid::{EntityId, EntityKind, GuidPrefix, GUID},
+  };
+
+  fn participant_attributes() -> ParticipantSecurityAttributes {
+    ParticipantSecurityAttributes {
+      plugin_participant_attributes: BuiltinPluginParticipantSecurityAttributes {
+        is_rtps_encrypted: false,
+        is_discovery_encrypted: false,
+        is_liveliness_encrypted: false,
+        is_rtps_origin_authenticated: false,
+        is_discovery_origin_authenticated: false,
+        is_liveliness_origin_authenticated: false,
+      }
+      .into(),
+      ..ParticipantSecurityAttributes::empty()
+    }
+  }
+
+  // Submessages and payloads encrypted, with receiver-specific MACs: each matched remote
+  // endpoint gets receiver-specific key material of its own.
+  fn endpoint_attributes() -> EndpointSecurityAttributes {
+    EndpointSecurityAttributes {
+      is_submessage_protected: true,
+      is_payload_protected: true,
+      plugin_endpoint_attributes: BuiltinPluginEndpointSecurityAttributes {
+        is_submessage_encrypted: true,
+        is_submessage_origin_authenticated: true,
+        is_payload_encrypted: true,
+      }
+      .into(),
+      ..EndpointSecurityAttributes::empty()
+    }
+  }
+
+  fn shared_secret() -> SharedSecretHandle {
+    SharedSecretHandle {
+      shared_secret: SharedSecret::from([7; 32]),
+      challenge1: Challenge::from([1; 32]),
+      challenge2: Challenge::from([2; 32]),
+    }
+  }
+
+  fn guid(participant: u8, entity: u8, kind: EntityKind) -> GUID {
+    GUID::new(
+      GuidPrefix::new(&[participant; 12]),
+      EntityId::new([0, 0, entity], kind),
+    )
+  }
+
+  // One participant's crypto plugin: its own handle and that of the other participant.
+  struct Side {
+    crypto: CryptographicBuiltin,
+    local: ParticipantCryptoHandle,
+    remote: ParticipantCryptoHandle,
+  }
+
+  fn side() -> Side {
+    let mut crypto = CryptographicBuiltin::new();
+    let local = crypto
+      .register_local_participant(0, 0, &[], participant_attributes())
+      .unwrap();
+    let remote = crypto
+      .register_matched_remote_participant(local, 1, 1, shared_secret())
+      .unwrap();
+    Side {
+      crypto,
+      local,
+      remote,
+    }
+  }
+
+  // Writer `w` on side `a`, reader `r` on side `b`: both register the other end and exchange
+  // crypto tokens. Returns (the reader's handle at `a`, the writer's handle at `b`).
+  fn match_and_exchange(
+    a: &mut Side,
+    w: DatawriterCryptoHandle,
+    w_guid: GUID,
+    b: &mut Side,
+    r: DatareaderCryptoHandle,
+    r_guid: GUID,
+  ) -> (DatareaderCryptoHandle, DatawriterCryptoHandle) {
+    let r_at_a = a
+      .crypto
+      .register_matched_remote_datareader(w, r_guid, a.remote, shared_secret(), false)
+      .unwrap();
+    let w_at_b = b
+      .crypto
+      .register_matched_remote_datawriter(r, w_guid, b.remote, shared_secret())
+      .unwrap();
+    let writer_tokens = a
+      .crypto
+      .create_local_datawriter_crypto_tokens(w, r_at_a)
+      .unwrap();
+    b.crypto
+      .set_remote_datawriter_crypto_tokens(r, w_at_b, writer_tokens)
+      .unwrap();
+    let reader_tokens = b
+      .crypto
+      .create_local_datareader_crypto_tokens(r, w_at_b)
+      .unwrap();
+    a.crypto
+      .set_remote_datareader_crypto_tokens(w, r_at_a, reader_tokens)
+      .unwrap();
+    (r_at_a, w_at_b)
+  }
+
+  fn payload_reaches(
+    a: &Side,
+    w: DatawriterCryptoHandle,
+    b: &Side,
+    r: DatareaderCryptoHandle,
+    w_at_b: DatawriterCryptoHandle,
+  ) -> bool {
+    let plain = b"an observation of 27 bytes!".to_vec();
+    let (encoded, _) = a
+      .crypto
+      .encode_serialized_payload(plain.clone(), w)
+      .unwrap();
+    assert_ne!(encoded, plain);
+    b.crypto
+      .decode_serialized_payload(encoded, ParameterList::new(), r, w_at_b)
+      .is_ok_and(|decoded| decoded == plain)
+  }
+
+  #[test]
+  fn two_remote_readers_of_one_participant_get_handles_of_their_own() {
+    let (mut a, mut b) = (side(), side());
+    let w_guid = guid(1, 1, EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let w = a
+      .crypto
+      .register_local_datawriter(a.local, &[], endpoint_attributes())
+      .unwrap();
+    let mut matched = Vec::new();
+    for entity in [1, 2] {
+      let r_guid = guid(2, entity, EntityKind::READER_NO_KEY_USER_DEFINED);
+      let r = b
+        .crypto
+        .register_local_datareader(b.local, &[], endpoint_attributes())
+        .unwrap();
+      let (r_at_a, w_at_b) = match_and_exchange(&mut a, w, w_guid, &mut b, r, r_guid);
+      matched.push((r, r_at_a, w_at_b));
+    }
+    let [(r1, r1_at_a, w_at_b1), (r2, r2_at_a, w_at_b2)] = matched[..] else {
+      unreachable!()
+    };
+    assert_ne!(r1_at_a, r2_at_a);
+    // Each reader has receiver-specific key material of its own.
+    let receiver_key_id = |r_at_a| {
+      a.crypto
+        .get_receiver_specific_encode_key_materials(&r_at_a)
+        .unwrap()
+        .key_material()
+        .receiver_specific_key_id
+    };
+    assert_ne!(receiver_key_id(r1_at_a), receiver_key_id(r2_at_a));
+    assert!(payload_reaches(&a, w, &b, r1, w_at_b1));
+    assert!(payload_reaches(&a, w, &b, r2, w_at_b2));
+
+    // One of them goes: the other keeps its handle, and the first one can come back.
+    a.crypto.unregister_datareader(r1_at_a).unwrap();
+    assert!(a
+      .crypto
+      .create_local_datawriter_crypto_tokens(w, r1_at_a)
+      .is_err());
+    assert!(a
+      .crypto
+      .create_local_datawriter_crypto_tokens(w, r2_at_a)
+      .is_ok());
+    let r1_guid = guid(2, 1, EntityKind::READER_NO_KEY_USER_DEFINED);
+    let again = a
+      .crypto
+      .register_matched_remote_datareader(w, r1_guid, a.remote, shared_secret(), false)
+      .unwrap();
+    assert!(again != r1_at_a && again != r2_at_a);
+  }
+
+  #[test]
+  fn two_remote_writers_of_one_participant_get_handles_of_their_own() {
+    let (mut a, mut b) = (side(), side());
+    let r_guid = guid(2, 1, EntityKind::READER_NO_KEY_USER_DEFINED);
+    let r = b
+      .crypto
+      .register_local_datareader(b.local, &[], endpoint_attributes())
+      .unwrap();
+    let mut matched = Vec::new();
+    for entity in [1, 2] {
+      let w_guid = guid(1, entity, EntityKind::WRITER_NO_KEY_USER_DEFINED);
+      let w = a
+        .crypto
+        .register_local_datawriter(a.local, &[], endpoint_attributes())
+        .unwrap();
+      let (_, w_at_b) = match_and_exchange(&mut a, w, w_guid, &mut b, r, r_guid);
+      matched.push((w, w_at_b));
+    }
+    let [(w1, w1_at_b), (w2, w2_at_b)] = matched[..] else {
+      unreachable!()
+    };
+    assert_ne!(w1_at_b, w2_at_b);
+    assert!(payload_reaches(&a, w1, &b, r, w1_at_b));
+    assert!(payload_reaches(&a, w2, &b, r, w2_at_b));
+    // A writer's payload does not pass for the other's.
+    assert!(!payload_reaches(&a, w1, &b, r, w2_at_b));
   }
 }
