@@ -107,7 +107,7 @@ pub struct LaunchArgs {
     /// [default: /]
     #[arg(long, value_name = "NAME")]
     enclave: Option<String>,
-    /// Every node in a security enclave of its own, PREFIX/<node> (PREFIX/sim,
+    /// Every node in a security enclave of its own, `PREFIX/<node>` (PREFIX/sim,
     /// PREFIX/task_manager, PREFIX/reward, PREFIX/recorder), e.g. made with `composuite
     /// security create-enclave KEYSTORE PREFIX/sim --grant sim --namespace NS`. Needs node
     /// processes (one environment, or --isolate): a composed process is one participant.
