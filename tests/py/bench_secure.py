@@ -10,7 +10,6 @@ Only run inside scripts/netns-isolate (scripts/bench-ros --secure does both)."""
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import os
 import signal
@@ -19,25 +18,11 @@ import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-PEER_SOURCE = REPO / "tests" / "interop" / "fastdds_secure_peer"
+import node_suite
+
 TASK = "IIWA/box/no_obstacle/pick_place"
 NS = "/bench"
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def build_peer() -> Path:
-    """The agent, built once per source version into the cache (as the interop test does)."""
-    digest = hashlib.sha256()
-    for name in ("peer.cpp", "Makefile"):
-        digest.update((PEER_SOURCE / name).read_bytes())
-    cache = Path(os.environ.get("COMPOSUITE_CACHE", Path.home() / ".cache" / "composuite-ros"))
-    out = cache / "fastdds_secure_peer" / digest.hexdigest()[:16]
-    binary = out / "fastdds_secure_peer"
-    if not binary.is_file():
-        out.mkdir(parents=True, exist_ok=True)
-        subprocess.run(["make", "-s", "-C", str(PEER_SOURCE), f"OUT={out}"], check=True)
-    return binary
 
 
 def tree_cpu_seconds(root: int) -> float:
@@ -125,7 +110,7 @@ def main() -> None:
     args = parser.parse_args()
     if not 2 <= args.steps <= 500:
         parser.error(f"--steps {args.steps}: between 2 and 500 (an episode's horizon)")
-    peer = build_peer()
+    peer = node_suite.fastdds_peer()
     domain = 40 + os.getpid() % 150
     results: dict[str, list[dict]] = {"plain": [], "secured": []}
     with tempfile.TemporaryDirectory(prefix="bench-secure-") as scratch:

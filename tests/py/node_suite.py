@@ -10,6 +10,7 @@ Only use it inside scripts/netns-isolate (or netns-run): the nodes speak DDS."""
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import random
@@ -108,6 +109,29 @@ def float_bits(values) -> list[str]:
 def ns_of(stamp) -> int:
     """A builtin_interfaces/Time as integer nanoseconds (exact, unlike float seconds)."""
     return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def fastdds_peer() -> Path:
+    """The Fast DDS agent of tests/interop/fastdds_secure_peer: $COMPOSUITE_FASTDDS_PEER, else
+    built once per source version (`make`, Debian's libfastrtps-dev) into the cache
+    ($COMPOSUITE_CACHE, default ~/.cache/composuite-ros)."""
+    given = os.environ.get("COMPOSUITE_FASTDDS_PEER")
+    if given:
+        return Path(given)
+    source = REPO / "tests" / "interop" / "fastdds_secure_peer"
+    digest = hashlib.sha256()
+    for name in ("peer.cpp", "Makefile"):
+        digest.update((source / name).read_bytes())
+    cache = Path(os.environ.get("COMPOSUITE_CACHE", Path.home() / ".cache" / "composuite-ros"))
+    out = cache / "fastdds_secure_peer" / digest.hexdigest()[:16]
+    peer = out / "fastdds_secure_peer"
+    if not peer.is_file():
+        out.mkdir(parents=True, exist_ok=True)
+        built = subprocess.run(["make", "-C", str(source), f"OUT={out}"],
+                               capture_output=True, text=True, timeout=300)
+        if built.returncode != 0:
+            raise RuntimeError(f"building the Fast DDS peer failed:\n{built.stdout}{built.stderr}")
+    return peer
 
 
 def random_domain() -> int:

@@ -12,7 +12,6 @@ Only run inside scripts/netns-isolate."""
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import signal
@@ -26,7 +25,6 @@ import pytest
 import node_suite
 
 COMPOSUITE = node_suite.node_dir() / "composuite"
-PEER_SOURCE = node_suite.REPO / "tests" / "interop" / "fastdds_secure_peer"
 TASK = "Jaco/plate/goal_wall/trash_can"
 NS = "/fd"
 SEED = 21
@@ -40,23 +38,10 @@ REFUSED_WINDOW_S = 5.0
 def peer() -> Path:
     """The peer binary: $COMPOSUITE_FASTDDS_PEER, else built once per source version into the
     cache ($COMPOSUITE_CACHE, default ~/.cache/composuite-ros)."""
-    given = os.environ.get("COMPOSUITE_FASTDDS_PEER")
-    if given:
-        return Path(given)
-    if not Path("/usr/include/fastdds/dds/domain/DomainParticipant.hpp").is_file():
+    if not os.environ.get("COMPOSUITE_FASTDDS_PEER") and not Path(
+            "/usr/include/fastdds/dds/domain/DomainParticipant.hpp").is_file():
         pytest.fail("Fast DDS headers missing: scripts/debian-packages installs libfastrtps-dev")
-    digest = hashlib.sha256()
-    for name in ("peer.cpp", "Makefile"):
-        digest.update((PEER_SOURCE / name).read_bytes())
-    cache = Path(os.environ.get("COMPOSUITE_CACHE", Path.home() / ".cache" / "composuite-ros"))
-    out = cache / "fastdds_secure_peer" / digest.hexdigest()[:16]
-    binary = out / "fastdds_secure_peer"
-    if not binary.is_file():
-        out.mkdir(parents=True, exist_ok=True)
-        built = subprocess.run(["make", "-C", str(PEER_SOURCE), f"OUT={out}"],
-                               capture_output=True, text=True, timeout=300)
-        assert built.returncode == 0, built.stdout + built.stderr
-    return binary
+    return node_suite.fastdds_peer()
 
 
 @pytest.fixture(scope="module")
@@ -83,9 +68,11 @@ def keystore(tmp_path_factory, domain) -> Path:
 
 
 @contextlib.contextmanager
-def secured_launch(log: Path, keystore: Path, domain: int, namespace: str, *extra: str):
-    """`composuite launch` (Enforce, enclave `/`, services in rmw_fastrtps' format) until every
-    node of every environment said it is up; yields (process, the log's text); stopped after."""
+def secured_launch(log: Path, keystore: Path, domain: int, namespace: str, *extra: str,
+                   task: str = TASK, ready: tuple[str, ...] = ()):
+    """`composuite launch` (Enforce, enclave `/` unless `extra` says otherwise, services in
+    rmw_fastrtps' format) until every node of every environment said it is up and the log shows
+    each of `ready`; yields (process, the log's text); stopped after."""
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
     env.update(ROS_DOMAIN_ID=str(domain), ROS_SECURITY_ENABLE="true",
                ROS_SECURITY_STRATEGY="Enforce", ROS_SECURITY_KEYSTORE=str(keystore))
@@ -93,14 +80,15 @@ def secured_launch(log: Path, keystore: Path, domain: int, namespace: str, *extr
     namespaces = [namespace] if envs == 1 else [f"{namespace}/env_{i:02}" for i in range(envs)]
     with open(log, "wb") as out:
         process = subprocess.Popen(
-            [str(COMPOSUITE), "launch", "--task", TASK, "--namespace", namespace,
+            [str(COMPOSUITE), "launch", "--task", task, "--namespace", namespace,
              "--service-mapping", "fastdds", "--log-level", "info", *extra],
             env=env, stdin=subprocess.DEVNULL, stdout=out, stderr=out)
     text = lambda: log.read_text(errors="replace")
     try:
         deadline = time.monotonic() + 30
-        while not all(f"{ns}/{node} up" in text() for ns in namespaces
-                      for node in node_suite.NODES):
+        while not (all(f"{ns}/{node} up" in text() for ns in namespaces
+                       for node in node_suite.NODES)
+                   and all(r in text() for r in ready)):
             assert process.poll() is None, text()[-4000:]
             assert time.monotonic() < deadline, text()[-4000:]
             time.sleep(0.05)

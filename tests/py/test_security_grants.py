@@ -7,17 +7,14 @@ what the permissions say. Only run inside scripts/netns-isolate."""
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import signal
 import subprocess
-import time
 
 import pytest
 
 import node_suite
-from test_security_fastdds import floats, peer  # noqa: F401  (peer: the fixture)
+from test_security_fastdds import floats, peer, secured_launch  # noqa: F401  (peer: fixture)
 
 COMPOSUITE = node_suite.node_dir() / "composuite"
 TASK = "Gen3/hollow_box/object_wall/push"
@@ -79,47 +76,12 @@ def keystore(tmp_path_factory, domain):
     return ks
 
 
-def secured(keystore, domain: int) -> dict:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
-    env.update(ROS_DOMAIN_ID=str(domain), ROS_SECURITY_ENABLE="true",
-               ROS_SECURITY_STRATEGY="Enforce", ROS_SECURITY_KEYSTORE=str(keystore))
-    return env
-
-
-@contextlib.contextmanager
-def launched(keystore, domain: int, scratch, namespace: str, *extra: str, ready=()):
-    """`composuite launch` of one environment in `namespace` under Enforce, each node in its
-    own enclave (--node-enclaves); yields (process, log text) once every node is up and the
-    log shows each of `ready`; stopped with SIGINT after."""
-    log = scratch / "launch.log"
-    with open(log, "wb") as out:
-        process = subprocess.Popen(
-            [str(COMPOSUITE), "launch", "--task", TASK, "--namespace", namespace,
-             "--service-mapping", "fastdds", "--node-enclaves", "/composuite",
-             "--log-level", "info", *extra],
-            env=secured(keystore, domain), stdin=subprocess.DEVNULL, stdout=out, stderr=out)
-    text = lambda: log.read_text(errors="replace")
-    try:
-        deadline = time.monotonic() + 30
-        while not (all(f"{namespace}/{node} up" in text() for node in NODES)
-                   and all(r in text() for r in ready)):
-            assert process.poll() is None, text()[-4000:]
-            assert time.monotonic() < deadline, text()[-4000:]
-            time.sleep(0.05)
-        yield process, text
-    finally:
-        process.send_signal(signal.SIGINT)
-        try:
-            code = process.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            code = process.wait()
-    assert code == 0, f"launch exited {code}:\n{text()[-4000:]}"
-
-
 @pytest.fixture(scope="module")
 def suite(tmp_path_factory, keystore, domain):
-    with launched(keystore, domain, tmp_path_factory.mktemp("grants_suite"), NS) as running:
+    """One environment under Enforce, each node in its own enclave (--node-enclaves)."""
+    log = tmp_path_factory.mktemp("grants_suite") / "launch.log"
+    with secured_launch(log, keystore, domain, NS, "--node-enclaves", "/composuite",
+                        task=TASK) as running:
         yield running
 
 
@@ -152,8 +114,9 @@ def test_the_recorder_in_its_own_enclave_records_the_environment(keystore, domai
     serves its parameters in the root namespace where launch runs it): it starts and subscribes
     to the environment's topics."""
     wanted = [f"recording {RECORDED_NS}/{t} " for t in RECORDED]
-    with launched(keystore, domain, tmp_path, RECORDED_NS, "--record", str(tmp_path / "bag"),
-                  ready=wanted) as (process, text):
+    with secured_launch(tmp_path / "launch.log", keystore, domain, RECORDED_NS,
+                        "--node-enclaves", "/composuite", "--record", str(tmp_path / "bag"),
+                        task=TASK, ready=wanted) as (process, text):
         assert "not allowed" not in text().lower(), text()[-3000:]
 
 

@@ -60,7 +60,7 @@ pub struct Topics {
 }
 
 /// The parameter services every node serves under its own name.
-const PARAMETER_SERVICES: [&str; 6] = [
+pub const PARAMETER_SERVICES: [&str; 6] = [
     "describe_parameters",
     "get_parameter_types",
     "get_parameters",
@@ -70,9 +70,9 @@ const PARAMETER_SERVICES: [&str; 6] = [
 ];
 
 /// The services of an action, relative to it.
-const ACTION_SERVICES: [&str; 3] = ["send_goal", "get_result", "cancel_goal"];
+pub const ACTION_SERVICES: [&str; 3] = ["send_goal", "get_result", "cancel_goal"];
 /// The topics of an action, relative to it.
-const ACTION_TOPICS: [&str; 2] = ["feedback", "status"];
+pub const ACTION_TOPICS: [&str; 2] = ["feedback", "status"];
 
 /// The commands an agent may send the sim.
 const COMMANDS: [&str; 6] = [

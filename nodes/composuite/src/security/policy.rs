@@ -9,19 +9,10 @@
 //! services — which sros2's policies pull in from its own `common/node.xml` with an XInclude;
 //! those includes are not read (`common/` ones are what this adds; another is refused).
 
+use composuite_ros::grants::{ACTION_SERVICES, ACTION_TOPICS, PARAMETER_SERVICES};
 use roxmltree::{Document, Node};
 
 use super::documents::Grant;
-
-/// The parameter services each node serves under its own name.
-const PARAMETER_SERVICES: [&str; 6] = [
-    "describe_parameters",
-    "get_parameter_types",
-    "get_parameters",
-    "list_parameters",
-    "set_parameters",
-    "set_parameters_atomically",
-];
 
 /// The grant of `enclave` in the policy document `xml` (named `file` in errors).
 pub fn grant_from_policy(xml: &str, file: &str, enclave: &str) -> Result<Grant, String> {
@@ -194,26 +185,24 @@ impl Rules {
 
     /// What `mode` on the resolved `name` allows.
     fn grant(&mut self, mode: &str, name: &str) {
-        let action_services = ["send_goal", "cancel_goal", "get_result"];
-        let action_topics = ["feedback", "status"];
         match mode {
             "publish" => self.publish(format!("rt/{name}")),
             "subscribe" => self.subscribe(format!("rt/{name}")),
             "reply" => self.serve(name),
             "request" => self.call(name),
             "execute" => {
-                for s in action_services {
+                for s in ACTION_SERVICES {
                     self.serve(&format!("{name}/_action/{s}"));
                 }
-                for t in action_topics {
+                for t in ACTION_TOPICS {
                     self.publish(format!("rt/{name}/_action/{t}"));
                 }
             }
             "call" => {
-                for s in action_services {
+                for s in ACTION_SERVICES {
                     self.call(&format!("{name}/_action/{s}"));
                 }
-                for t in action_topics {
+                for t in ACTION_TOPICS {
                     self.subscribe(format!("rt/{name}/_action/{t}"));
                 }
             }
