@@ -9,7 +9,7 @@ use nalgebra::{
 };
 
 use crate::arena::robot_base_pose;
-use crate::physics::{ARM_DOF, JointKind, RobotModel};
+use crate::physics::{ARM_DOF, JointKind, JointModel, RobotModel};
 
 /// World poses of every body for joint positions `q` (arm joints; fingers at `q_fingers`).
 pub fn body_poses(
@@ -18,20 +18,27 @@ pub fn body_poses(
     q_fingers: [f64; 2],
 ) -> Vec<Isometry3<f64>> {
     let mut poses = vec![robot_base_pose(); model.bodies.len()];
-    for j in 0..model.joints.len() {
-        let value = if j < ARM_DOF {
-            q[j]
-        } else {
-            q_fingers[j - ARM_DOF]
-        };
-        place_child(model, j, value, &mut poses);
-    }
+    place_children(model, q, q_fingers, model.joints.len(), &mut poses);
     poses
 }
 
-/// Sets the pose of joint `j`'s child body from its parent's and the joint's `value`.
-fn place_child(model: &RobotModel, j: usize, value: f64, poses: &mut [Isometry3<f64>]) {
-    let joint = &model.joints[j];
+/// Sets the poses of the first `joints` joints' child bodies, in order, each from its parent's
+/// and the joint's value (the arm's from `q`, the fingers' from `q_fingers`).
+fn place_children(
+    model: &RobotModel,
+    q: &[f64; ARM_DOF],
+    q_fingers: [f64; 2],
+    joints: usize,
+    poses: &mut [Isometry3<f64>],
+) {
+    let values = q.iter().chain(&q_fingers);
+    for (joint, value) in model.joints.iter().zip(values).take(joints) {
+        place_child(joint, *value, poses);
+    }
+}
+
+/// Sets the pose of `joint`'s child body from its parent's and the joint's `value`.
+fn place_child(joint: &JointModel, value: f64, poses: &mut [Isometry3<f64>]) {
     let motion = match joint.kind {
         JointKind::Revolute => Isometry3::from_parts(
             Translation3::identity(),
@@ -97,10 +104,7 @@ pub fn solve_ik(
     };
     for iteration in 0..=max_iterations {
         if iteration > 0 {
-            let values = q.iter().copied().chain([0.0, 0.0]);
-            for (j, value) in values.enumerate().take(moving) {
-                place_child(model, j, value, &mut poses);
-            }
+            place_children(model, &q, [0.0, 0.0], moving, &mut poses);
         }
         let pose = poses[body] * in_body;
         let p = pose.translation.vector;
@@ -200,9 +204,9 @@ pub fn null_space_motion(
     let p = (poses[body] * in_body).translation.vector;
     let jac = jacobian(model, &poses, &p, 1.0);
     // dq − J⁺ J dq, with a tiny damping so a singular pose does not blow up.
-    let jjt = jac * jac.transpose() + SMatrix::<f64, 6, 6>::identity() * 1e-9;
+    let jjt = damped_gram(&jac, 1e-9);
     let task = jjt.lu().solve(&(jac * dq))?;
-    Some(dq - jac.transpose() * task)
+    Some(dq - transpose_times(&jac, &task))
 }
 
 /// A rotation whose z axis points along `z` and whose y axis is as close as possible to `y`.

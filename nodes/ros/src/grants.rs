@@ -60,7 +60,7 @@ pub struct Topics {
 }
 
 /// The parameter services every node serves under its own name.
-pub const PARAMETER_SERVICES: [&str; 6] = [
+const PARAMETER_SERVICES: [&str; 6] = [
     "describe_parameters",
     "get_parameter_types",
     "get_parameters",
@@ -70,9 +70,9 @@ pub const PARAMETER_SERVICES: [&str; 6] = [
 ];
 
 /// The services of an action, relative to it.
-pub const ACTION_SERVICES: [&str; 3] = ["send_goal", "get_result", "cancel_goal"];
+const ACTION_SERVICES: [&str; 3] = ["send_goal", "get_result", "cancel_goal"];
 /// The topics of an action, relative to it.
-pub const ACTION_TOPICS: [&str; 2] = ["feedback", "status"];
+const ACTION_TOPICS: [&str; 2] = ["feedback", "status"];
 
 /// The commands an agent may send the sim.
 const COMMANDS: [&str; 6] = [
@@ -117,32 +117,89 @@ fn wire(prefix: &str, namespace: &str, name: &str) -> String {
 }
 
 impl Topics {
-    fn serve(&mut self, namespace: &str, service: &str) {
-        self.subscribe
-            .push(wire("rq", namespace, &format!("{service}Request")));
-        self.publish
-            .push(wire("rr", namespace, &format!("{service}Reply")));
+    /// `topic` added to `list` unless it is there already: the permissions name each once.
+    fn add(list: &mut Vec<String>, topic: String) {
+        if !list.contains(&topic) {
+            list.push(topic);
+        }
     }
 
-    fn call(&mut self, namespace: &str, service: &str) {
-        self.publish
-            .push(wire("rq", namespace, &format!("{service}Request")));
-        self.subscribe
-            .push(wire("rr", namespace, &format!("{service}Reply")));
+    /// Publishing ROS topic `name` of `namespace`.
+    pub fn publish_topic(&mut self, namespace: &str, name: &str) {
+        Self::add(&mut self.publish, wire("rt", namespace, name));
+    }
+
+    /// Subscribing to ROS topic `name` of `namespace`.
+    pub fn subscribe_topic(&mut self, namespace: &str, name: &str) {
+        Self::add(&mut self.subscribe, wire("rt", namespace, name));
+    }
+
+    /// Serving `service` of `namespace`: its requests in, its replies out.
+    pub fn serve(&mut self, namespace: &str, service: &str) {
+        Self::add(
+            &mut self.subscribe,
+            wire("rq", namespace, &format!("{service}Request")),
+        );
+        Self::add(
+            &mut self.publish,
+            wire("rr", namespace, &format!("{service}Reply")),
+        );
+    }
+
+    /// Calling `service` of `namespace`: its requests out, its replies in.
+    pub fn call(&mut self, namespace: &str, service: &str) {
+        Self::add(
+            &mut self.publish,
+            wire("rq", namespace, &format!("{service}Request")),
+        );
+        Self::add(
+            &mut self.subscribe,
+            wire("rr", namespace, &format!("{service}Reply")),
+        );
+    }
+
+    /// Serving `action` of `namespace`: its services, and its feedback and status out.
+    pub fn serve_action(&mut self, namespace: &str, action: &str) {
+        for service in ACTION_SERVICES {
+            self.serve(namespace, &format!("{action}/_action/{service}"));
+        }
+        for name in ACTION_TOPICS {
+            self.publish_topic(namespace, &format!("{action}/_action/{name}"));
+        }
+    }
+
+    /// Calling `action` of `namespace`: its services, and its feedback and status in.
+    pub fn call_action(&mut self, namespace: &str, action: &str) {
+        for service in ACTION_SERVICES {
+            self.call(namespace, &format!("{action}/_action/{service}"));
+        }
+        for name in ACTION_TOPICS {
+            self.subscribe_topic(namespace, &format!("{action}/_action/{name}"));
+        }
     }
 
     /// What every ROS node has: the log, parameter events, and its parameter services (under
     /// `node` in `namespace`, or under any name for `node = "*"`).
-    fn ros_node(&mut self, namespace: &str, node: &str) {
-        self.publish
-            .extend(["rt/rosout".to_string(), "rt/parameter_events".to_string()]);
+    pub fn ros_node(&mut self, namespace: &str, node: &str) {
+        self.publish_topic("/", "rosout");
+        self.publish_topic("/", "parameter_events");
         for service in PARAMETER_SERVICES {
             if node == "*" {
-                self.subscribe.push(format!("rq/*/{service}Request"));
-                self.publish.push(format!("rr/*/{service}Reply"));
+                Self::add(&mut self.subscribe, format!("rq/*/{service}Request"));
+                Self::add(&mut self.publish, format!("rr/*/{service}Reply"));
             } else {
                 self.serve(namespace, &format!("{node}/{service}"));
             }
+        }
+    }
+
+    /// `other`'s topics added, each once, in the order first named.
+    pub fn merge(&mut self, other: Topics) {
+        for topic in other.publish {
+            Self::add(&mut self.publish, topic);
+        }
+        for topic in other.subscribe {
+            Self::add(&mut self.subscribe, topic);
         }
     }
 }
@@ -150,7 +207,6 @@ impl Topics {
 /// What `role` needs in the environment in `namespace` (absolute, `/` for the root).
 pub fn grant(role: Role, namespace: &str) -> Topics {
     let mut t = Topics::default();
-    let topic = |name: &str| wire("rt", namespace, name);
     match role {
         Role::Node(kind) => {
             t.ros_node(namespace, kind.name());
@@ -187,30 +243,31 @@ pub fn grant(role: Role, namespace: &str) -> Topics {
                 // It records whatever its regex picks, in any namespace (below).
                 NodeKind::Recorder => (vec![], vec![]),
             };
-            t.publish.extend(publish.iter().map(|n| topic(n)));
-            t.subscribe.extend(subscribe.iter().map(|n| topic(n)));
+            for name in publish {
+                t.publish_topic(namespace, name);
+            }
+            for name in subscribe {
+                t.subscribe_topic(namespace, name);
+            }
             if kind == NodeKind::Recorder {
-                t.subscribe.push("rt/*".into());
+                t.subscribe_topic("/", "*");
             }
             for service in services(kind) {
                 t.serve(namespace, service);
             }
             for action in actions(kind) {
-                for service in ACTION_SERVICES {
-                    t.serve(namespace, &format!("{action}/_action/{service}"));
-                }
-                for name in ACTION_TOPICS {
-                    t.publish.push(topic(&format!("{action}/_action/{name}")));
-                }
+                t.serve_action(namespace, action);
             }
         }
         Role::Player => {
             t.ros_node(namespace, "*");
-            t.publish.push(topic("*"));
+            t.publish_topic(namespace, "*");
         }
         Role::Agent => {
             t.ros_node(namespace, "*");
-            t.publish.extend(COMMANDS.iter().map(|n| topic(n)));
+            for name in COMMANDS {
+                t.publish_topic(namespace, name);
+            }
             for kind in [NodeKind::Sim, NodeKind::TaskManager] {
                 for service in services(kind) {
                     t.call(namespace, service);
@@ -222,8 +279,8 @@ pub fn grant(role: Role, namespace: &str) -> Topics {
                 }
             }
             // Everything the environment publishes, parameter events included.
-            t.subscribe.push(topic("*"));
-            t.subscribe.push("rt/parameter_events".into());
+            t.subscribe_topic(namespace, "*");
+            t.subscribe_topic("/", "parameter_events");
         }
     }
     t

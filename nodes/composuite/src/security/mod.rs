@@ -173,7 +173,7 @@ fn role_grant(roles: &[String], namespaces: &[String]) -> Result<Grant, String> 
             "--namespace {bad} is invalid; it must be absolute, e.g. /env_00 or '/train/env_*'"
         ));
     }
-    let (mut publish, mut subscribe) = (Vec::new(), Vec::new());
+    let mut topics = grants::Topics::default();
     for name in roles {
         let role = Role::parse(name).ok_or_else(|| {
             format!(
@@ -182,19 +182,10 @@ fn role_grant(roles: &[String], namespaces: &[String]) -> Result<Grant, String> 
             )
         })?;
         for namespace in namespaces {
-            let topics = grants::grant(role, namespace);
-            publish.extend(topics.publish);
-            subscribe.extend(topics.subscribe);
+            topics.merge(grants::grant(role, namespace));
         }
     }
-    let once = |topics: Vec<String>| {
-        let mut seen = std::collections::HashSet::new();
-        topics
-            .into_iter()
-            .filter(|t| seen.insert(t.clone()))
-            .collect::<Vec<_>>()
-    };
-    Ok(Grant::of(&once(publish), &once(subscribe)))
+    Ok(Grant::of(&topics.publish, &topics.subscribe))
 }
 
 /// The domain id given, else `ROS_DOMAIN_ID`, else 0 (what `ros2 security` does).

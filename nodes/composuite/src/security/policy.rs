@@ -9,7 +9,7 @@
 //! services — which sros2's policies pull in from its own `common/node.xml` with an XInclude;
 //! those includes are not read (`common/` ones are what this adds; another is refused).
 
-use composuite_ros::grants::{ACTION_SERVICES, ACTION_TOPICS, PARAMETER_SERVICES};
+use composuite_ros::grants::Topics;
 use roxmltree::{Document, Node};
 
 use super::documents::Grant;
@@ -45,19 +45,21 @@ pub fn grant_from_policy(xml: &str, file: &str, enclave: &str) -> Result<Grant, 
             }
         ));
     };
-    let mut rules = Rules::default();
+    let mut topics = Topics::default();
     for profile in chosen.descendants().filter(|n| n.has_tag_name("profile")) {
         let ns = profile.attribute("ns").unwrap_or("/");
         let node = profile
             .attribute("node")
             .ok_or_else(|| format!("{file}: a <profile> of {enclave} has no node=\"…\""))?;
         let names = Names { ns, node };
-        rules.ros_node(&names);
+        // What sros2's `common/node.xml` gives every node.
+        topics.subscribe_topic("/", "parameter_events");
+        topics.ros_node(&format!("/{}", ns.trim_matches('/')), node);
         for element in profile.children().filter(Node::is_element) {
-            rules.element(&element, &names, file)?;
+            grant_element(&mut topics, &element, &names, file)?;
         }
     }
-    Ok(Grant::of(&rules.publish, &rules.subscribe))
+    Ok(Grant::of(&topics.publish, &topics.subscribe))
 }
 
 /// A profile's node and namespace, to resolve names with.
@@ -81,133 +83,79 @@ impl Names<'_> {
     }
 }
 
-/// The DDS topics collected so far, each once.
-#[derive(Default)]
-struct Rules {
-    publish: Vec<String>,
-    subscribe: Vec<String>,
-}
-
-impl Rules {
-    fn add(list: &mut Vec<String>, topic: String) {
-        if !list.contains(&topic) {
-            list.push(topic);
+/// One element of a profile: `<topics>`, `<services>` or `<actions>` with its permissions as
+/// attributes and the names as children.
+fn grant_element(
+    topics: &mut Topics,
+    element: &Node,
+    names: &Names,
+    file: &str,
+) -> Result<(), String> {
+    let tag = element.tag_name().name();
+    if tag == "include" {
+        let href = element.attribute("href").unwrap_or("");
+        if href.contains("common/") {
+            return Ok(()); // What every profile gets anyway.
         }
+        return Err(format!(
+            "{file}: <xi:include href=\"{href}\">: only sros2's common/ includes are \
+             understood (their content is added to every profile); inline the others"
+        ));
     }
-
-    fn publish(&mut self, topic: String) {
-        Self::add(&mut self.publish, topic);
-    }
-
-    fn subscribe(&mut self, topic: String) {
-        Self::add(&mut self.subscribe, topic);
-    }
-
-    /// Serving service `name` (resolved): its requests in, its replies out.
-    fn serve(&mut self, name: &str) {
-        self.subscribe(format!("rq/{name}Request"));
-        self.publish(format!("rr/{name}Reply"));
-    }
-
-    /// Calling service `name` (resolved).
-    fn call(&mut self, name: &str) {
-        self.publish(format!("rq/{name}Request"));
-        self.subscribe(format!("rr/{name}Reply"));
-    }
-
-    /// What sros2's `common/node.xml` gives every node.
-    fn ros_node(&mut self, names: &Names) {
-        self.publish("rt/rosout".into());
-        self.publish("rt/parameter_events".into());
-        self.subscribe("rt/parameter_events".into());
-        for service in PARAMETER_SERVICES {
-            self.serve(&names.resolve(&format!("~{service}")));
-        }
-    }
-
-    /// One element of a profile: `<topics>`, `<services>` or `<actions>` with its permissions
-    /// as attributes and the names as children.
-    fn element(&mut self, element: &Node, names: &Names, file: &str) -> Result<(), String> {
-        let tag = element.tag_name().name();
-        if tag == "include" {
-            let href = element.attribute("href").unwrap_or("");
-            if href.contains("common/") {
-                return Ok(()); // What `ros_node` adds.
-            }
+    let (child, modes): (&str, &[&str]) = match tag {
+        "topics" => ("topic", &["publish", "subscribe"]),
+        "services" => ("service", &["reply", "request"]),
+        "actions" => ("action", &["execute", "call"]),
+        other => {
             return Err(format!(
-                "{file}: <xi:include href=\"{href}\">: only sros2's common/ includes are \
-                 understood (their content is added to every profile); inline the others"
+                "{file}: <{other}> in a profile: valid are <topics>, <services>, <actions>"
             ));
         }
-        let (child, modes): (&str, &[&str]) = match tag {
-            "topics" => ("topic", &["publish", "subscribe"]),
-            "services" => ("service", &["reply", "request"]),
-            "actions" => ("action", &["execute", "call"]),
+    };
+    let items: Vec<String> = element
+        .children()
+        .filter(|n| n.has_tag_name(child))
+        .map(|n| names.resolve(n.text().unwrap_or("").trim()))
+        .collect();
+    for attribute in element.attributes() {
+        let mode = attribute.name();
+        if !modes.contains(&mode) {
+            return Err(format!(
+                "{file}: <{tag} {mode}=…>: valid are {}",
+                modes.join(" and ")
+            ));
+        }
+        match attribute.value() {
+            "ALLOW" => {}
+            "DENY" => {
+                return Err(format!(
+                    "{file}: <{tag} {mode}=\"DENY\">: deny rules are not supported here; the \
+                     permissions deny whatever is not allowed, so leave them out"
+                ));
+            }
             other => {
                 return Err(format!(
-                    "{file}: <{other}> in a profile: valid are <topics>, <services>, <actions>"
+                    "{file}: <{tag} {mode}=\"{other}\">: valid are ALLOW and DENY"
                 ));
-            }
-        };
-        let items: Vec<String> = element
-            .children()
-            .filter(|n| n.has_tag_name(child))
-            .map(|n| names.resolve(n.text().unwrap_or("").trim()))
-            .collect();
-        for attribute in element.attributes() {
-            let mode = attribute.name();
-            if !modes.contains(&mode) {
-                return Err(format!(
-                    "{file}: <{tag} {mode}=…>: valid are {}",
-                    modes.join(" and ")
-                ));
-            }
-            match attribute.value() {
-                "ALLOW" => {}
-                "DENY" => {
-                    return Err(format!(
-                        "{file}: <{tag} {mode}=\"DENY\">: deny rules are not supported here; the \
-                         permissions deny whatever is not allowed, so leave them out"
-                    ));
-                }
-                other => {
-                    return Err(format!(
-                        "{file}: <{tag} {mode}=\"{other}\">: valid are ALLOW and DENY"
-                    ));
-                }
-            }
-            for name in &items {
-                self.grant(mode, name);
             }
         }
-        Ok(())
+        for name in &items {
+            grant(topics, mode, name);
+        }
     }
+    Ok(())
+}
 
-    /// What `mode` on the resolved `name` allows.
-    fn grant(&mut self, mode: &str, name: &str) {
-        match mode {
-            "publish" => self.publish(format!("rt/{name}")),
-            "subscribe" => self.subscribe(format!("rt/{name}")),
-            "reply" => self.serve(name),
-            "request" => self.call(name),
-            "execute" => {
-                for s in ACTION_SERVICES {
-                    self.serve(&format!("{name}/_action/{s}"));
-                }
-                for t in ACTION_TOPICS {
-                    self.publish(format!("rt/{name}/_action/{t}"));
-                }
-            }
-            "call" => {
-                for s in ACTION_SERVICES {
-                    self.call(&format!("{name}/_action/{s}"));
-                }
-                for t in ACTION_TOPICS {
-                    self.subscribe(format!("rt/{name}/_action/{t}"));
-                }
-            }
-            _ => unreachable!("modes are checked by the caller"),
-        }
+/// What `mode` on the resolved `name` (absolute, without its `/`) allows.
+fn grant(topics: &mut Topics, mode: &str, name: &str) {
+    match mode {
+        "publish" => topics.publish_topic("/", name),
+        "subscribe" => topics.subscribe_topic("/", name),
+        "reply" => topics.serve("/", name),
+        "request" => topics.call("/", name),
+        "execute" => topics.serve_action("/", name),
+        "call" => topics.call_action("/", name),
+        _ => unreachable!("modes are checked by the caller"),
     }
 }
 

@@ -154,21 +154,18 @@ impl Clearance {
     /// when all keep `margin`). Smooth where the smallest gap is not, so its gradient still
     /// points away from several solids close at once.
     pub fn crowding(&self, model: &RobotModel, q: &[f64; ARM_DOF], margin: f64) -> f64 {
-        let poses = body_poses(model, q, [0.0, 0.0]);
-        let mut sum = -0.0;
-        for group in &self.groups {
-            if !self.spheres[group.spheres.start].swings {
-                continue;
-            }
-            // Solids at least `margin` from every sphere of the group add nothing.
-            let near = self.near(&poses, group, margin);
-            for s in &self.spheres[group.spheres.clone()] {
-                sum += (margin - self.sphere_gap(&poses, s, &near))
-                    .max(0.0)
-                    .powi(2);
-            }
-        }
-        sum
+        let poses = &body_poses(model, q, [0.0, 0.0]);
+        self.groups
+            .iter()
+            .filter(|group| self.spheres[group.spheres.start].swings)
+            .flat_map(|group| {
+                // Solids at least `margin` from every sphere of the group add nothing.
+                let near = self.near(poses, group, margin);
+                self.spheres[group.spheres.clone()]
+                    .iter()
+                    .map(move |s| (margin - self.sphere_gap(poses, s, &near)).max(0.0).powi(2))
+            })
+            .sum()
     }
 
     /// The smallest gap (m) between the arm at `q` (fingers open) and the arena.
