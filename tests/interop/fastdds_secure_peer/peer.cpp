@@ -404,26 +404,24 @@ struct Endpoints {
     return topics[name] = t;
   }
   // ROS's default QoS (and rmw_qos_profile_services_default): reliable, volatile, keep last 10.
-  DataWriter* writer(const std::string& name, const std::string& type) {
-    DataWriterQos q = DATAWRITER_QOS_DEFAULT;
+  template <class Qos>
+  static Qos ros_default(Qos q) {
     q.reliability().kind = RELIABLE_RELIABILITY_QOS;
     q.durability().kind = VOLATILE_DURABILITY_QOS;
     q.history().kind = KEEP_LAST_HISTORY_QOS;
     q.history().depth = 10;
     q.endpoint().history_memory_policy =
         eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+    return q;
+  }
+  DataWriter* writer(const std::string& name, const std::string& type) {
+    DataWriterQos q = ros_default(DATAWRITER_QOS_DEFAULT);
     DataWriter* w = publisher->create_datawriter(topic(name, type), q);
     if (w == nullptr) fail("not allowed to create a DataWriter to topic " + name);
     return w;
   }
   DataReader* reader(const std::string& name, const std::string& type) {
-    DataReaderQos q = DATAREADER_QOS_DEFAULT;
-    q.reliability().kind = RELIABLE_RELIABILITY_QOS;
-    q.durability().kind = VOLATILE_DURABILITY_QOS;
-    q.history().kind = KEEP_LAST_HISTORY_QOS;
-    q.history().depth = 10;
-    q.endpoint().history_memory_policy =
-        eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+    DataReaderQos q = ros_default(DATAREADER_QOS_DEFAULT);
     DataReader* r = subscriber->create_datareader(topic(name, type), q);
     if (r == nullptr) fail("not allowed to create a DataReader to topic " + name);
     return r;
