@@ -33,7 +33,9 @@ def test_expert_files_succeed_and_replay_bit_for_bit(tmp_path):
     assert path == tmp_path / "expert" / EASY_FOLDER / "data.hdf5"
     with h5py.File(path) as f:
         assert f.attrs["policy"] == "expert"
-        assert json.loads(f.attrs["policy_settings"])["noise"] == 0.0
+        settings = json.loads(f.attrs["policy_settings"])
+        assert settings["noise"] == 0.0
+        assert settings["expert_revision"] == medium.EXPERT_REVISION >= 1
         starts, successes = f["episode_starts"][:], f["successes"][:]
         assert list(starts) == [0, 500]
         # Both episodes succeed: the expert solves this task on seeds 0 and 1.
@@ -78,6 +80,10 @@ def test_medium_measures_what_the_table_says(name):
     success rate exactly, within 0.05 of the target."""
     table = shipped_table()
     c = table.tasks[name]
+    assert c.current, (
+        f"{name}'s noise was calibrated with expert revision {c.expert_revision}, the expert is "
+        f"revision {medium.EXPERT_REVISION}: calibrate it again with composuite-dataset "
+        f"calibrate-medium --tasks {name} --out <the shipped medium_noise.json>")
     rate = medium.success_rate(name, c.noise, episodes=c.episodes, first_seed=c.first_seed,
                                threads=2, horizon=c.horizon)
     assert rate == c.success
@@ -128,6 +134,20 @@ def test_calibrate_medium_writes_and_extends_a_table(tmp_path):
         settings = json.loads(f.attrs["policy_settings"])
     assert settings["target_success"] == 0.6
     assert settings["calibration_source"] == "measured when this file was generated"
+    # An entry measured with another revision of the expert's actions is not used, and the
+    # next calibration replaces it.
+    stale = medium.NoiseTable.load(out)
+    stale.tasks[EASY].expert_revision = medium.EXPERT_REVISION + 1
+    stale.save(out)
+    notes = []
+    calibration, source = medium.noise_for(datasets.select_tasks([EASY])[0], 0.3, 500,
+                                           table=out, threads=2, episodes=6,
+                                           progress=notes.append)
+    assert source == "measured when this file was generated" and calibration.current
+    assert f"measured with expert revision {medium.EXPERT_REVISION + 1}" in notes[0], notes
+    third = cli("calibrate-medium", "--tasks", EASY, "--episodes", "6", "--out", str(out))
+    assert third.returncode == 0 and "calibrating it again" in third.stderr, third.stderr
+    assert medium.NoiseTable.load(out).tasks[EASY].current
 
 
 def test_bad_calibration_input_is_refused(tmp_path):

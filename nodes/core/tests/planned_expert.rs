@@ -4,7 +4,7 @@
 
 use composuite_core::TaskSpec;
 use composuite_core::env::{Action, Env, EnvConfig};
-use composuite_core::expert::{PlannedExpert, Stage, run_planned_episode};
+use composuite_core::expert::{PLANNED_EXPERT_REVISION, PlannedExpert, Stage, run_planned_episode};
 
 /// The planned expert succeeds in every episode of task `name` on `seeds`.
 fn assert_solves(name: &str, seeds: &[u64]) {
@@ -98,4 +98,50 @@ fn an_expert_episode_replays_from_its_stored_actions() {
         assert_eq!(step.info.success, *success, "step {i}");
     }
     assert!(replay.ended().is_some());
+}
+
+/// The digest of the actions [`PLANNED_EXPERT_REVISION`] stands for: one episode of each
+/// objective and object, 300 steps each, every action's 8 numbers hashed by their bits.
+const REVISION_DIGEST: (u32, u64) = (2, 0x615930f4ecce3e9a);
+
+/// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
+fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {
+    let task: TaskSpec = name.parse().unwrap();
+    let mut env = Env::new(task, EnvConfig::default());
+    env.reset(seed).unwrap();
+    let mut expert = PlannedExpert::new(task);
+    for _ in 0..steps {
+        let action = expert.act(&env);
+        let Action::Reference(a) = action else {
+            panic!("the planned expert acted with {action:?}");
+        };
+        for byte in a.iter().flat_map(|x| x.to_bits().to_le_bytes()) {
+            *digest = (*digest ^ byte as u64).wrapping_mul(0x100_0000_01b3);
+        }
+        env.step(&action).unwrap();
+    }
+}
+
+/// A change that moves any of the expert's actions must raise [`PLANNED_EXPERT_REVISION`]:
+/// the offline datasets' noise table was measured with the actions of one revision, and
+/// calibrates again where an entry's revision is not the expert's.
+#[test]
+fn the_expert_revision_names_its_actions() {
+    let mut digest = 0xcbf2_9ce4_8422_2325u64;
+    for (name, seed) in [
+        ("IIWA/box/no_obstacle/pick_place", 0),
+        ("Jaco/plate/object_wall/trash_can", 1),
+        ("Gen3/dumbbell/no_obstacle/shelf", 2),
+        ("Panda/hollow_box/goal_wall/push", 3),
+    ] {
+        action_digest(name, seed, 300, &mut digest);
+    }
+    assert_eq!(
+        (PLANNED_EXPERT_REVISION, digest),
+        REVISION_DIGEST,
+        "the planned expert's actions are not those of revision {}: if that is meant, raise \
+         PLANNED_EXPERT_REVISION (expert/planned.rs), pin (revision, digest) here, and \
+         calibrate the noise table's test tasks again (docs/src/offline-datasets.md)",
+        REVISION_DIGEST.0
+    );
 }

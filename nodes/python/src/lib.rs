@@ -502,6 +502,10 @@ mod _native {
     #[pymodule_export]
     use super::sample_tasks;
 
+    /// The planned expert's revision: which version of its actions (on this physics) the
+    /// `expert` and `medium` policies play; the medium noise table records it per task.
+    #[pymodule_export]
+    const PLANNED_EXPERT_REVISION: u32 = composuite_core::expert::PLANNED_EXPERT_REVISION;
     /// Width of a `stage_values` row.
     #[pymodule_export]
     const MAX_STAGES: usize = super::MAX_STAGES;

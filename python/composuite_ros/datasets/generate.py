@@ -134,13 +134,14 @@ def _policy(shard: Shard, threads: int, progress: Callable[[str], None] | None
                                "rng": "MT19937 keyed by the task index and the episode's seed"}
     if shard.dataset_type == "expert":
         return "expert", 0.0, {"expert": _EXPERT, "actions": "the reference's 8 numbers, float32",
-                               "noise": 0.0}
+                               "noise": 0.0, "expert_revision": medium.EXPERT_REVISION}
     if shard.dataset_type == "medium":
         calibration, source = medium.noise_for(shard.task, shard.target_success, shard.horizon,
                                                table=shard.medium_table, threads=threads,
                                                progress=progress)
         return "expert", calibration.noise, {
             "expert": _EXPERT, "actions": "the reference's 8 numbers, float32",
+            "expert_revision": medium.EXPERT_REVISION,
             "noise": calibration.noise,
             "noise_on": "each of the 7 joint values: Gaussian of this standard deviation, then "
                         "clipped to [-1, 1]; the gripper value is the expert's",

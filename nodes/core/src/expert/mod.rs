@@ -74,7 +74,7 @@ mod reach;
 mod script;
 mod track;
 
-pub use planned::{PlannedExpert, Stage, run_planned_episode};
+pub use planned::{PLANNED_EXPERT_REVISION, PlannedExpert, Stage, run_planned_episode};
 pub use script::{Expert, Phase};
 
 use crate::TaskSpec;
