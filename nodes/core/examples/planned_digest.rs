@@ -10,12 +10,12 @@
 //! (sorted), then the digest of all of them and the expert's total and median time; the five
 //! episodes that took longest (expert and physics) go to standard error.
 
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
+use composuite_core::TaskSpec;
 use composuite_core::env::{Action, Env, EnvConfig};
 use composuite_core::expert::PlannedExpert;
-use composuite_core::{TaskSpec, all_tasks};
+
+#[path = "common/episodes.rs"]
+mod episodes;
 
 /// FNV-1a over the bytes of 64-bit words.
 struct Digest(u64);
@@ -54,56 +54,20 @@ fn run(task: TaskSpec, seed: u64) -> (u64, bool, f64) {
 }
 
 fn main() {
-    let mut seeds = 1u64;
-    let mut threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let mut names = Vec::new();
-    let mut args = std::env::args().skip(1);
-    while let Some(arg) = args.next() {
-        let mut value = |flag: &str| -> u64 {
-            let v = args
-                .next()
-                .unwrap_or_else(|| panic!("{flag} needs a number"));
-            v.parse()
-                .unwrap_or_else(|_| panic!("{flag} {v}: not a number"))
-        };
-        match arg.as_str() {
-            "--seeds" => seeds = value("--seeds"),
-            "--threads" => threads = value("--threads") as usize,
-            _ => names.push(arg),
-        }
-    }
-    let tasks: Vec<TaskSpec> = if names.is_empty() {
-        all_tasks()
-    } else {
-        names
-            .iter()
-            .map(|n| n.parse().unwrap_or_else(|e| panic!("{n}: {e}")))
-            .collect()
-    };
-    let jobs: Vec<(TaskSpec, u64)> = tasks
-        .iter()
-        .flat_map(|&t| (0..seeds).map(move |s| (t, s)))
-        .collect();
-    let next = AtomicUsize::new(0);
-    let results = Mutex::new(Vec::new());
+    let episodes = episodes::from_args(&[]);
     let started = std::time::Instant::now();
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| {
-                while let Some(&(task, seed)) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let started = std::time::Instant::now();
-                    let (digest, success, seconds) = run(task, seed);
-                    let wall = started.elapsed().as_secs_f64();
-                    let line = format!("{task} seed {seed}: {digest:016x} success {success}");
-                    results
-                        .lock()
-                        .unwrap()
-                        .push((line, digest, success, seconds, wall));
-                }
-            });
-        }
-    });
-    let mut results = results.into_inner().unwrap();
+    let mut results: Vec<_> = episodes
+        .run(|task, seed| {
+            let started = std::time::Instant::now();
+            let (digest, success, seconds) = run(task, seed);
+            (digest, success, seconds, started.elapsed().as_secs_f64())
+        })
+        .into_iter()
+        .map(|(task, seed, (digest, success, seconds, wall))| {
+            let line = format!("{task} seed {seed}: {digest:016x} success {success}");
+            (line, digest, success, seconds, wall)
+        })
+        .collect();
     results.sort_by(|a, b| a.0.cmp(&b.0));
     let mut all = Digest::new();
     for (line, digest, _, _, _) in &results {

@@ -11,12 +11,13 @@
 //! the stage they ended in and by task.
 
 use std::collections::BTreeMap;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
+use composuite_core::TaskSpec;
 use composuite_core::env::{Env, EnvConfig};
 use composuite_core::expert::{PlannedExpert, Stage as PlannedStage};
-use composuite_core::{TaskSpec, all_tasks};
+
+#[path = "common/episodes.rs"]
+mod episodes;
 
 /// One episode: whether it succeeded, and each stage with the step it began at.
 fn run(task: TaskSpec, seed: u64) -> (bool, Vec<(PlannedStage, u32)>) {
@@ -38,56 +39,13 @@ fn run(task: TaskSpec, seed: u64) -> (bool, Vec<(PlannedStage, u32)>) {
 }
 
 fn main() {
-    let (mut seeds, mut first) = (1u64, 0u64);
-    let mut threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let mut every = false;
-    let mut names = Vec::new();
-    let mut args = std::env::args().skip(1);
-    while let Some(arg) = args.next() {
-        let mut value = |flag: &str| -> u64 {
-            let v = args
-                .next()
-                .unwrap_or_else(|| panic!("{flag} needs a number"));
-            v.parse()
-                .unwrap_or_else(|_| panic!("{flag} {v}: not a number"))
-        };
-        match arg.as_str() {
-            "--seeds" => seeds = value("--seeds"),
-            "--first" => first = value("--first"),
-            "--threads" => threads = value("--threads") as usize,
-            "--all" => every = true,
-            _ => names.push(arg),
-        }
-    }
-    let tasks: Vec<TaskSpec> = if names.is_empty() {
-        all_tasks()
-    } else {
-        names
-            .iter()
-            .map(|n| n.parse().unwrap_or_else(|e| panic!("{n}: {e}")))
-            .collect()
-    };
-    let jobs: Vec<(TaskSpec, u64)> = tasks
-        .iter()
-        .flat_map(|&t| (first..first + seeds).map(move |s| (t, s)))
+    let episodes = episodes::from_args(&["--all"]);
+    let every = !episodes.switches.is_empty();
+    let results: Vec<_> = episodes
+        .run(run)
+        .into_iter()
+        .map(|(task, seed, (success, timeline))| (task.to_string(), seed, success, timeline))
         .collect();
-    let next = AtomicUsize::new(0);
-    let results = Mutex::new(Vec::new());
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| {
-                while let Some(&(task, seed)) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let (success, timeline) = run(task, seed);
-                    results
-                        .lock()
-                        .unwrap()
-                        .push((task.to_string(), seed, success, timeline));
-                }
-            });
-        }
-    });
-    let mut results = results.into_inner().unwrap();
-    results.sort_by(|a, b| (&a.0, a.1).cmp(&(&b.0, b.1)));
     let mut by_stage: BTreeMap<String, usize> = BTreeMap::new();
     let mut by_task: BTreeMap<&str, (usize, usize)> = BTreeMap::new();
     for (task, seed, success, timeline) in &results {
