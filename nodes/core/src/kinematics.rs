@@ -90,10 +90,46 @@ pub fn solve_ik(
     q0: &[f64; ARM_DOF],
     max_iterations: usize,
 ) -> Option<IkResult> {
+    solve_ik_with(model, link, target, q0, max_iterations, false)
+}
+
+/// Iterations between the checks of [`solve_ik_until_stalled`], and the checks compared.
+const STALL_CHECK_EVERY: usize = 25;
+const STALL_WINDOW_CHECKS: usize = 2;
+/// A solve whose weighted error is still above this fraction of what it was
+/// [`STALL_WINDOW_CHECKS`] checks earlier has stalled.
+const STALL_RATIO: f64 = 0.99;
+
+/// [`solve_ik`] that gives up early where it stopped converging: when the weighted error
+/// (position + orientation weight × orientation) shrank by less than 1 % over the last 50
+/// iterations, the result is where the solve stands. Seeds spread over the joint space mostly
+/// settle in a local minimum short of the target within a few dozen iterations, and running
+/// them out to the limit was ~85 % of the planned expert's IK time; measured on six tasks'
+/// searches (25,506 solves), this stops 0.2 % of the solves that would have met their target.
+pub fn solve_ik_until_stalled(
+    model: &RobotModel,
+    link: &str,
+    target: &IkTarget,
+    q0: &[f64; ARM_DOF],
+    max_iterations: usize,
+) -> Option<IkResult> {
+    solve_ik_with(model, link, target, q0, max_iterations, true)
+}
+
+fn solve_ik_with(
+    model: &RobotModel,
+    link: &str,
+    target: &IkTarget,
+    q0: &[f64; ARM_DOF],
+    max_iterations: usize,
+    stop_when_stalled: bool,
+) -> Option<IkResult> {
     let (body, in_body) = *model.links.get(link)?;
     let mut q = *q0;
     let damping = 0.05_f64;
     let mut result = None;
+    // The weighted errors at the last checks, for `stop_when_stalled` (a ring).
+    let mut checked_errors = [f64::INFINITY; STALL_WINDOW_CHECKS];
     // Only the arm joints move the link (unless it is on a finger, then all of them do); the
     // poses are updated in place, in `body_poses`' order and arithmetic.
     let mut poses = body_poses(model, &q, [0.0, 0.0]);
@@ -127,6 +163,16 @@ pub fn solve_ik(
         } else {
             0.0
         };
+        if stop_when_stalled && iteration % STALL_CHECK_EVERY == 0 {
+            let error = e_pos.norm() + w * e_rot.norm();
+            let check = iteration / STALL_CHECK_EVERY;
+            if check >= STALL_WINDOW_CHECKS
+                && error > STALL_RATIO * checked_errors[check % STALL_WINDOW_CHECKS]
+            {
+                break;
+            }
+            checked_errors[check % STALL_WINDOW_CHECKS] = error;
+        }
         let jac = jacobian(model, &poses, &p, w);
         let mut err = SVector::<f64, 6>::zeros();
         err.fixed_rows_mut::<3>(0).copy_from(&e_pos);
@@ -250,5 +296,42 @@ mod tests {
                     .all(|(a, b)| a.to_bits() == b.to_bits())
             );
         }
+    }
+
+    /// Out of reach, the stalling solve gives up within a few dozen iterations where the plain
+    /// one runs to the limit; within reach, it converges to the same joints as the plain one.
+    #[test]
+    fn a_stalled_solve_gives_up_and_a_converging_one_does_not() {
+        let model = crate::physics::robot_model(crate::axes::Robot::Panda);
+        let q0 = [0.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.8];
+        let reachable = link_pose(
+            model,
+            &[0.2, 0.5, -0.1, -1.5, 0.2, 1.9, 0.5],
+            crate::physics::GRIP_SITE_LINK,
+        )
+        .expect("the grip site");
+        let target = |position| IkTarget {
+            position,
+            orientation: Some(reachable.rotation),
+            orientation_weight: 0.5,
+        };
+        let within = target(reachable.translation.vector);
+        let plain =
+            solve_ik(model, crate::physics::GRIP_SITE_LINK, &within, &q0, 600).expect("solved");
+        let stalling =
+            solve_ik_until_stalled(model, crate::physics::GRIP_SITE_LINK, &within, &q0, 600)
+                .expect("solved");
+        assert!(plain.position_error < 1e-5, "{plain:?}");
+        assert_eq!(plain, stalling);
+
+        let far = target(Vector3::new(2.5, 0.0, 1.0));
+        let plain =
+            solve_ik(model, crate::physics::GRIP_SITE_LINK, &far, &q0, 600).expect("a result");
+        let stalling =
+            solve_ik_until_stalled(model, crate::physics::GRIP_SITE_LINK, &far, &q0, 600)
+                .expect("a result");
+        assert_eq!(plain.iterations, 600);
+        assert!(stalling.iterations < 200, "{stalling:?}");
+        assert!(stalling.position_error > 1.0, "{stalling:?}");
     }
 }

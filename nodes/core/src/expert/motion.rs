@@ -7,7 +7,9 @@ use std::f64::consts::PI;
 
 use super::clearance::Clearance;
 use super::track::joint_distance;
-use crate::kinematics::{IkResult, IkTarget, link_pose, null_space_motion, solve_ik};
+use crate::kinematics::{
+    IkResult, IkTarget, link_pose, null_space_motion, solve_ik, solve_ik_until_stalled,
+};
 use crate::physics::{ARM_DOF, GRIP_SITE_LINK, RobotModel};
 
 /// The pads' centre is this far above the grip site along the gripper's approach axis (m):
@@ -168,7 +170,9 @@ pub(super) fn pad_ik_solutions(
     }
     let mut found: Vec<([f64; ARM_DOF], f64)> = Vec::new();
     for s in &seeds {
-        let Some(r) = solve_ik(model, GRIP_SITE_LINK, &target, s, IK_RETRY_ITERATIONS) else {
+        let Some(r) =
+            solve_ik_until_stalled(model, GRIP_SITE_LINK, &target, s, IK_RETRY_ITERATIONS)
+        else {
             continue;
         };
         if !met(&r) || found.iter().any(|(f, _)| distance(f, &r.q) < 0.05) {
