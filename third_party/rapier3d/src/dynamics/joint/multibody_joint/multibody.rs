@@ -12,7 +12,9 @@ use crate::math::{
     ANG_DIM, AngVector, AngularInertia, DIM, DVector, Jacobian, Pose, Real, SPATIAL_DIM, Vector,
 };
 use crate::prelude::MultibodyJoint;
-use crate::utils::{AngularInertiaOps, CrossProduct, CrossProductMatrix, IndexMut2, vect_to_na};
+use crate::utils::{
+    AngularInertiaOps, CrossProduct, CrossProductMatrix, IndexMut2, dot_as_nalgebra, vect_to_na,
+};
 use na::{self, DMatrix, DVectorView, DVectorViewMut, Dyn, SMatrix, SVector, StorageMut};
 
 #[cfg(doc)]
@@ -1722,28 +1724,42 @@ impl Multibody {
             angular: unit_torque,
         };
 
+        // CompoSuite-ROS patch: on the slices, with nalgebra's order of operations —
+        // `tr_mul_to`'s dot product per column of the (column-major, 6-row) body Jacobian and
+        // the two dots at the end by `dot_as_nalgebra`, `M⁻¹·J` by `solve_slice_mut` when no DoF
+        // is kinematic —: the same values bit for bit, without the views' set-up and the
+        // solve's copies (a grasp's contact rows call this ~40 times a physics step).
+        let n = self.ndofs;
         let link = &self.links[link_id];
-        let mut out_j = jacobians.rows_mut(*j_id, self.ndofs);
-        self.body_jacobians[link.internal_id].tr_mul_to(force.as_vector(), &mut out_j);
-
-        // TODO: Optimize with a copy_nonoverlapping?
-        for i in 0..self.ndofs {
-            jacobians[wj_id + i] = jacobians[*j_id + i];
+        let body_j = self.body_jacobians[link.internal_id].as_slice();
+        let force = force.as_vector().as_slice();
+        let all = jacobians.as_mut_slice();
+        // `J` and its copy that the solve below turns into `M⁻¹·J`, entry by entry.
+        for c in 0..n {
+            let entry = dot_as_nalgebra(&body_j[c * SPATIAL_DIM..(c + 1) * SPATIAL_DIM], force);
+            all[*j_id + c] = entry;
+            all[wj_id + c] = entry;
         }
 
-        {
-            let mut out_invm_j = jacobians.rows_mut(wj_id, self.ndofs);
+        if self.augmented_mass_indices.dim_after_removal(n) == n {
+            self.inv_augmented_mass
+                .solve_slice_mut(&mut all[wj_id..wj_id + n]);
+        } else {
+            let mut out_invm_j = jacobians.rows_mut(wj_id, n);
             self.augmented_mass_indices
                 .with_rearranged_rows_mut(&mut out_invm_j, |out_invm_j| {
                     self.inv_augmented_mass.solve_mut(out_invm_j);
                 });
         }
 
-        let j = jacobians.rows(*j_id, self.ndofs);
-        let invm_j = jacobians.rows(wj_id, self.ndofs);
-        *j_id += self.ndofs * 2;
+        let all = jacobians.as_slice();
+        let (j, invm_j) = (&all[*j_id..wj_id], &all[wj_id..wj_id + n]);
+        *j_id += n * 2;
 
-        (j.dot(&invm_j), j.dot(&self.generalized_velocity()))
+        (
+            dot_as_nalgebra(j, invm_j),
+            dot_as_nalgebra(j, &self.velocities.as_slice()[..n]),
+        )
     }
 
     /// Fills `jacobians` with the relative jacobian `J = J2ᵀ·f2 − J1ᵀ·f1` of two links of `self`, then `M⁻¹·J`

@@ -170,6 +170,31 @@ impl MultibodyCholesky {
         }
     }
 
+    /// [`Self::solve_mut`] on a contiguous slice: the same operations in the same order (the
+    /// product by `M⁻¹` from a stack copy of `b`, column by column, skipping zero entries), so
+    /// the same values bit for bit, without the copies in and out of a strided view.
+    pub fn solve_slice_mut(&self, b: &mut [Real]) {
+        let n = self.dim();
+        assert_eq!(n, b.len(), "Cholesky solve dimension mismatch.");
+        if n > STACK_DIM {
+            let mut view = na::DVectorViewMut::from_slice(b, n);
+            self.solve_mut(&mut view);
+            return;
+        }
+        let mut rhs_stack = [0.0; STACK_DIM];
+        let rhs = &mut rhs_stack[..n];
+        rhs.copy_from_slice(b);
+        b.fill(0.0);
+        let inverse = self.inverse.as_slice();
+        for (c, bc) in rhs.iter().enumerate() {
+            if *bc != 0.0 {
+                for (xr, mrc) in b.iter_mut().zip(&inverse[c * n..(c + 1) * n]) {
+                    *xr += mrc * bc;
+                }
+            }
+        }
+    }
+
     /// Every column of `M⁻¹` into `out` (dim × dim).
     pub fn solve_all_units(&self, out: &mut DMatrix<Real>) {
         assert_eq!(
@@ -215,6 +240,27 @@ mod tests {
             chol.solve_all_units(&mut inverse);
             let identity = &m * &inverse;
             assert!((identity - DMatrix::<Real>::identity(n, n)).amax() <= 1e-4);
+        }
+    }
+
+    #[test]
+    fn the_slice_solve_equals_the_view_solve_bit_for_bit() {
+        for n in [1, 4, 9, 14] {
+            let mut chol = MultibodyCholesky::default();
+            chol.factorise(&spd(n, 7 + n as u32), n);
+            for zeros in [0, 1, 3] {
+                // Zero entries take the skip; a -0 one too.
+                let b = DVector::<Real>::from_fn(n, |i, _| match i % 4 {
+                    _ if i < zeros => if i == 1 { -0.0 } else { 0.0 },
+                    k => (k as Real * 0.37 + i as Real).sin(),
+                });
+                let mut view = b.clone();
+                chol.solve_mut(&mut view);
+                let mut slice = b.clone();
+                chol.solve_slice_mut(slice.as_mut_slice());
+                let bits = |v: &DVector<Real>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&slice), bits(&view), "n {n}, {zeros} zeros");
+            }
         }
     }
 

@@ -923,3 +923,62 @@ fn links_are_placed_only_where_moved() {
         "a mass change pending: updated"
     );
 }
+
+/// CompoSuite-ROS patch: `fill_jacobians` on slices (the contact rows' `J`, `M⁻¹·J` and the two
+/// dots) gives what nalgebra's `tr_mul_to`, the Cholesky solve of a view and `dot` gave, bit for
+/// bit, on a swinging chain of nine hinges (an arm and gripper's nine DoFs: nalgebra's `dot`
+/// sums blocks of eight apart), for every link (the fixed root too) and three force directions.
+#[test]
+#[cfg(feature = "dim3")]
+fn contact_jacobians_on_slices_equal_nalgebras() {
+    let mut world = PhysicsWorld::new();
+    let mut parent = world.insert_body(RigidBodyBuilder::fixed());
+    let mut handle = None;
+    for k in 0..9 {
+        let (link, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.3 * k as Real, 1.0, 0.0)),
+            ColliderBuilder::cuboid(0.1, 0.3, 0.05 + 0.02 * k as Real),
+        );
+        let axis = [Vector::Z, Vector::X, Vector::Y][k % 3];
+        let joint = RevoluteJointBuilder::new(axis).local_anchor2(Vector::new(-0.15, 0.0, 0.0));
+        handle = world.insert_multibody_joint(parent, link, joint);
+        parent = link;
+    }
+    let handle = handle.unwrap();
+    let mut checked = 0;
+    for _ in 0..30 {
+        world.step();
+        let (multibody, _) = world.multibody_joints.get(handle).unwrap();
+        let n = multibody.ndofs();
+        assert_eq!((multibody.num_links(), n), (10, 9), "the fixed root and nine hinges");
+        for link_id in 0..multibody.num_links() {
+            for s in 0..3 {
+                let force = Vector::new(0.3 - 0.2 * s as Real, 0.7, -0.4 + 0.5 * s as Real);
+                let torque = Vector::new(-0.1 * s as Real, 0.25, 0.6);
+                let mut jacobians = DVector::zeros(2 * n + 3);
+                let mut j_id = 1;
+                let (gain, vel) =
+                    multibody.fill_jacobians(link_id, force, torque, &mut j_id, &mut jacobians);
+                assert_eq!(j_id, 1 + 2 * n);
+
+                let spatial = na::Vector6::new(force.x, force.y, force.z, torque.x, torque.y, torque.z);
+                let mut j = DVector::zeros(n);
+                multibody
+                    .body_jacobian(multibody.link(link_id).unwrap().internal_id)
+                    .tr_mul_to(&spatial, &mut j);
+                let mut invm_j = j.clone();
+                multibody.inv_augmented_mass().solve_mut(&mut invm_j);
+                let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&jacobians.as_slice()[1..1 + n]), bits(j.as_slice()));
+                assert_eq!(bits(&jacobians.as_slice()[1 + n..1 + 2 * n]), bits(invm_j.as_slice()));
+                assert_eq!(gain.to_bits(), j.dot(&invm_j).to_bits());
+                assert_eq!(vel.to_bits(), j.dot(&multibody.generalized_velocity()).to_bits());
+                if link_id > 0 {
+                    assert!(gain > 0.0, "a force on a moving link has a positive gain");
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 30 * 10 * 3);
+}

@@ -2,7 +2,7 @@ use crate::dynamics::solver::SolverVel;
 use crate::dynamics::solver::contact_constraint::GenericContactConstraint;
 use crate::dynamics::solver::{ContactConstraintNormalPart, ContactConstraintTangentPart};
 use crate::math::{AngVector, DIM, DVector, Real, Vector};
-use crate::utils::{ComponentMul, DotProduct};
+use crate::utils::{ComponentMul, DotProduct, axpy_as_nalgebra, dot_as_nalgebra};
 #[cfg(feature = "dim2")]
 use {crate::utils::OrthonormalBasis, na::SimdPartialOrd};
 
@@ -51,16 +51,22 @@ impl GenericRhs {
     ) -> Real {
         match self {
             GenericRhs::SolverVel(rhs) => dir.dot(rhs.linear) + gcross.gdot(rhs.angular),
+            // CompoSuite-ROS patch: on the slices the views wrapped, summed as nalgebra's `dot`
+            // (`dot_as_nalgebra`): the same value bit for bit, without the views' set-up.
             GenericRhs::GenericId(solver_vel) => {
-                let j = jacobians.rows(j_id, ndofs);
-                let rhs = solver_vels.rows(*solver_vel as usize, ndofs);
-                j.dot(&rhs)
+                let v = *solver_vel as usize;
+                dot_as_nalgebra(
+                    &jacobians.as_slice()[j_id..j_id + ndofs],
+                    &solver_vels.as_slice()[v..v + ndofs],
+                )
             }
             GenericRhs::Fixed => 0.0,
         }
     }
 
-    #[inline]
+    // CompoSuite-ROS patch: always inlined (on slices it grew past the inliner's limit, and a
+    // call per row and pass cost more than the work).
+    #[inline(always)]
     fn apply_impulse(
         &mut self,
         j_id: usize,
@@ -85,11 +91,16 @@ impl GenericRhs {
                     rhs.angular += ii_torque_dir * impulse;
                 }
             }
+            // CompoSuite-ROS patch: nalgebra's `axpy(impulse, wj, 1)` on the slices
+            // (`axpy_as_nalgebra`), bit for bit.
             GenericRhs::GenericId(solver_vel) => {
                 let wj_id = j_id + ndofs;
-                let wj = jacobians.rows(wj_id, ndofs);
-                let mut rhs = solver_vels.rows_mut(*solver_vel as usize, ndofs);
-                rhs.axpy(impulse, &wj, 1.0);
+                let v = *solver_vel as usize;
+                axpy_as_nalgebra(
+                    &mut solver_vels.as_mut_slice()[v..v + ndofs],
+                    impulse,
+                    &jacobians.as_slice()[wj_id..wj_id + ndofs],
+                );
             }
             GenericRhs::Fixed => {}
         }
