@@ -1728,7 +1728,7 @@ impl Multibody {
         // `tr_mul_to`'s dot product per column of the (column-major, 6-row) body Jacobian and
         // the two dots at the end by `dot_as_nalgebra`, `M⁻¹·J` by `solve_slice_mut` when no DoF
         // is kinematic —: the same values bit for bit, without the views' set-up and the
-        // solve's copies (a grasp's contact rows call this ~40 times a physics step).
+        // solve's copies (a grasp's contact rows call this for each of their rows every step).
         let n = self.ndofs;
         let link = &self.links[link_id];
         let body_j = self.body_jacobians[link.internal_id].as_slice();

@@ -139,52 +139,44 @@ impl MultibodyCholesky {
         &self.inverse
     }
 
-    /// Solves `M·x = b` in place: `x = M⁻¹·b`.
+    /// Solves `M·x = b` in place: `x = M⁻¹·b`. `b` may be a strided view: it is solved in a
+    /// contiguous copy (on the stack up to `STACK_DIM`) by [`Self::solve_slice_mut`].
     pub fn solve_mut<S: StorageMut<Real, Dyn, U1>>(&self, b: &mut Matrix<Real, Dyn, U1, S>) {
         let n = self.dim();
         assert_eq!(n, b.nrows(), "Cholesky solve dimension mismatch.");
-        // From a contiguous copy (on the stack up to `STACK_DIM`): `b` may be a strided view.
-        let (mut rhs_stack, mut x_stack) = ([0.0; STACK_DIM], [0.0; STACK_DIM]);
-        let (mut rhs_heap, mut x_heap) = (Vec::new(), Vec::new());
-        let (rhs, x) = if n <= STACK_DIM {
-            (&mut rhs_stack[..n], &mut x_stack[..n])
+        let mut stack = [0.0; STACK_DIM];
+        let mut heap = Vec::new();
+        let x = if n <= STACK_DIM {
+            &mut stack[..n]
         } else {
-            rhs_heap.resize(n, 0.0);
-            x_heap.resize(n, 0.0);
-            (&mut rhs_heap[..], &mut x_heap[..])
+            heap.resize(n, 0.0);
+            &mut heap[..]
         };
-        for (value, entry) in rhs.iter_mut().zip(b.iter()) {
+        for (value, entry) in x.iter_mut().zip(b.iter()) {
             *value = *entry;
         }
-        // Column by column of the (column-major) inverse: x += M⁻¹[:, c]·b[c].
-        let inverse = self.inverse.as_slice();
-        for (c, bc) in rhs.iter().enumerate() {
-            if *bc != 0.0 {
-                for (xr, mrc) in x.iter_mut().zip(&inverse[c * n..(c + 1) * n]) {
-                    *xr += mrc * bc;
-                }
-            }
-        }
+        self.solve_slice_mut(x);
         for (r, value) in x.iter().enumerate() {
             b[r] = *value;
         }
     }
 
-    /// [`Self::solve_mut`] on a contiguous slice: the same operations in the same order (the
-    /// product by `M⁻¹` from a stack copy of `b`, column by column, skipping zero entries), so
-    /// the same values bit for bit, without the copies in and out of a strided view.
+    /// Solves `M·x = b` in place on a contiguous slice: `x = M⁻¹·b`, the product by `M⁻¹` from
+    /// a copy of `b` (on the stack up to `STACK_DIM`), column by column, skipping zero entries.
     pub fn solve_slice_mut(&self, b: &mut [Real]) {
         let n = self.dim();
         assert_eq!(n, b.len(), "Cholesky solve dimension mismatch.");
-        if n > STACK_DIM {
-            let mut view = na::DVectorViewMut::from_slice(b, n);
-            self.solve_mut(&mut view);
-            return;
-        }
-        let mut rhs_stack = [0.0; STACK_DIM];
-        let rhs = &mut rhs_stack[..n];
+        let mut stack = [0.0; STACK_DIM];
+        let mut heap = Vec::new();
+        let rhs = if n <= STACK_DIM {
+            &mut stack[..n]
+        } else {
+            heap.resize(n, 0.0);
+            &mut heap[..]
+        };
         rhs.copy_from_slice(b);
         b.fill(0.0);
+        // Column by column of the (column-major) inverse: x += M⁻¹[:, c]·b[c].
         let inverse = self.inverse.as_slice();
         for (c, bc) in rhs.iter().enumerate() {
             if *bc != 0.0 {
