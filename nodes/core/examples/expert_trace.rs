@@ -11,8 +11,8 @@ use composuite_core::expert::{Expert, PlannedExpert};
 
 /// Either expert, asked for its next action and where it stands.
 enum Driver {
-    Scripted(Expert),
-    Planned(PlannedExpert),
+    Scripted(Box<Expert>),
+    Planned(Box<PlannedExpert>),
 }
 
 impl Driver {
@@ -43,9 +43,9 @@ fn main() {
     let mut env = Env::new(task, EnvConfig::default());
     env.reset(seed).expect("reset");
     let mut expert = if planned {
-        Driver::Planned(PlannedExpert::new(task))
+        Driver::Planned(Box::new(PlannedExpert::new(task)))
     } else {
-        Driver::Scripted(Expert::new(task))
+        Driver::Scripted(Box::new(Expert::new(task)))
     };
     let mut last_phase = None;
     while env.ended().is_none() {

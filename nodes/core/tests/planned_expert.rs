@@ -70,6 +70,17 @@ fn the_planned_expert_pushes_the_plate_from_behind_the_object_wall() {
 
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
+/// Pushes past the goal wall it failed before (2026-11-30, seeds 0–9: the Jaco's plate 0 of
+/// 10, its box 2) and solves now: the plate held by its rim, the gripper turned about the
+/// vertical on the way from the wall's end to the goal so that it does not end reaching back
+/// across the wall's line; the box taken round the wall's end as high as a push allows, the
+/// forearm over the wall's top corner.
+#[test]
+fn the_planned_expert_pushes_round_the_goal_wall() {
+    assert_solves("Jaco/plate/goal_wall/push", &[0, 1]);
+    assert_solves("Jaco/box/goal_wall/push", &[0]);
+}
+
 #[test]
 fn an_expert_episode_replays_from_its_stored_actions() {
     let task: TaskSpec = "Gen3/hollow_box/no_obstacle/pick_place".parse().unwrap();
@@ -102,7 +113,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 
 /// The digest of the actions [`PLANNED_EXPERT_REVISION`] stands for: one episode of each
 /// objective and object, 300 steps each, every action's 8 numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (3, 0x615930f4ecce3e9a);
+const REVISION_DIGEST: (u32, u64) = (4, 0x93eb93fcf4bb0785);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {

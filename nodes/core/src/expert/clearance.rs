@@ -73,6 +73,29 @@ pub(super) struct Clearance {
 impl Clearance {
     /// The arm `model` in the arena of `objective` and `obstacle`.
     pub fn new(model: &RobotModel, objective: Objective, obstacle: Obstacle) -> Clearance {
+        Clearance::keeping(model, objective, obstacle, |_| true)
+    }
+
+    /// [`Clearance::new`] without the bins' floors: what a push must keep clear of, whose
+    /// fingers and object ride just off the floor on purpose (the fingers' spheres, rounder
+    /// than the fingers, reach centimetres into it and would hide every other gap).
+    pub fn above_the_floors(
+        model: &RobotModel,
+        objective: Objective,
+        obstacle: Obstacle,
+    ) -> Clearance {
+        Clearance::keeping(model, objective, obstacle, |part| {
+            !part.name.ends_with("/floor")
+        })
+    }
+
+    /// The arm `model` and the colliding parts of the arena that `keep` keeps.
+    fn keeping(
+        model: &RobotModel,
+        objective: Objective,
+        obstacle: Obstacle,
+        keep: impl Fn(&Placed) -> bool,
+    ) -> Clearance {
         let mut spheres = Vec::new();
         let hand: Vec<usize> = model.joints[ARM_DOF - 1..]
             .iter()
@@ -95,7 +118,7 @@ impl Clearance {
         }
         let solids = arena_parts(objective, obstacle)
             .iter()
-            .filter(|p| p.collides)
+            .filter(|p| p.collides && keep(p))
             .map(solid)
             .collect();
         Clearance::of(spheres, solids)
@@ -578,5 +601,34 @@ mod tests {
             touching > 50 && touching < 1400,
             "{touching} of 1536 poses touch"
         );
+    }
+
+    /// Above the floors, the model keeps every solid but the bins' floors: a pose whose fingers
+    /// reach into bin 1's floor, and nothing else near, comes close only with the floors in;
+    /// one with the hand on the goal wall's top comes just as close either way.
+    #[test]
+    fn above_the_floors_leaves_out_the_floors_and_only_them() {
+        let (objective, obstacle) = (Objective::Push, Obstacle::GoalWall);
+        let with = Clearance::new(robot_model(Robot::Iiwa), objective, obstacle);
+        let above = Clearance::above_the_floors(robot_model(Robot::Iiwa), objective, obstacle);
+        let floors = arena_parts(objective, obstacle)
+            .iter()
+            .filter(|p| p.collides && p.name.ends_with("/floor"))
+            .count();
+        assert_eq!(floors, 2, "bin 1's and bin 2's");
+        assert_eq!(above.solids.len() + floors, with.solids.len());
+        // A 1 cm sphere on the floor of bin 1, and one on the goal wall's top.
+        let on_the_floor = Point3::new(0.1, -0.3, 0.825);
+        let on_the_wall = Point3::new(0.0, -0.01, 1.105);
+        let gap = |c: &Clearance, p: Point3<f64>| {
+            c.solids
+                .iter()
+                .map(|solid| box_distance(solid, &p) - 0.01)
+                .fold(f64::INFINITY, f64::min)
+        };
+        assert!(gap(&with, on_the_floor) < 0.0);
+        assert!(gap(&above, on_the_floor) > 0.01);
+        assert_eq!(gap(&with, on_the_wall), gap(&above, on_the_wall));
+        assert!(gap(&above, on_the_wall) < 0.0);
     }
 }

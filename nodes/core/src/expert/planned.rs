@@ -31,7 +31,7 @@ use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model
 /// datasets' noise table records it with each calibration and calibrates again where it
 /// differs; `tests/planned_expert.rs` pins a digest of a few episodes to it, so a change
 /// that moves the actions fails there until this is raised and the digest pinned anew.
-pub const PLANNED_EXPERT_REVISION: u32 = 3;
+pub const PLANNED_EXPERT_REVISION: u32 = 4;
 
 /// Control steps the gripper is given to open or close: its command moves 0.25 per step
 /// (8 steps end to end), and the fingers follow.
@@ -78,9 +78,23 @@ const PUSH_RISE_CHECK: f64 = 0.006;
 /// (which is at x 0.11) that a pushed object may go round by (x, m), in the order tried.
 const GOAL_WALL_Y: f64 = -0.01;
 const AROUND_GOAL_WALL_X: [f64; 3] = [0.22, 0.17, 0.26];
-/// A push past the goal wall first goes along the wall to its lane where the object is more
-/// than this (m) short of the lane.
+/// A push past the goal wall may first go along the wall to its lane (when the diagonal to the
+/// lane comes closer to the wall) where the object is more than this (m) short of the lane.
 const ALONG_THE_WALL_FIRST: f64 = 0.05;
+/// The object's origin's height (m) on the way round the goal wall from a top grasp: as high as
+/// a Push lets it (its episode ends above 0.9), so the forearm passes over the wall's end
+/// higher. (A side grasp keeps its lift: the plate held by its rim tilts in the pads.)
+const ROUND_THE_WALL_Z: f64 = 0.885;
+/// Where a push round the goal wall may end (x, y offsets from the goal, m; success allows 3 cm):
+/// the goal, or a little further from the wall's end, which the gripper of a side grasp then
+/// clears more easily.
+const GOAL_SHIFTS: [[f64; 2]; 2] = [[0.0, 0.0], [0.015, 0.015]];
+/// Turns (rad) about the vertical the gripper may make on the way from past the goal wall's
+/// end to the goal: a gripper that held the object from the object's side of the wall
+/// otherwise ends reaching back across the wall's line, right by its end.
+const FINAL_TURNS: [f64; 7] = [0.0, 0.4, -0.4, 0.8, -0.8, 1.2, -1.2];
+/// How much more gap (m) turned or shifted lines must keep than the best so far to replace it.
+const TURN_GAIN: f64 = 0.005;
 /// Lanes (x, m) across the shelf's opening (x −0.1…0.3) the object may go in along.
 const SHELF_LANES_X: [f64; 4] = [0.1, 0.17, 0.03, 0.24];
 /// Turns (rad) of the gripper about the vertical in front of the shelf, tried with each lane.
@@ -166,6 +180,8 @@ pub struct PlannedExpert {
     stage: Stage,
     tracker: Option<Tracker>,
     clearance: Clearance,
+    /// The same without the floors, which a push's fingers and object skim on purpose.
+    above_the_floors: Clearance,
     /// The reference gripper's command level, as this expert's own actions have moved it
     /// (0 after a reset, ±0.25 per step, in [−1, 1]: −1 open, +1 closed).
     gripper: f64,
@@ -196,6 +212,11 @@ impl PlannedExpert {
             stage: Stage::Start,
             tracker: None,
             clearance: Clearance::new(robot_model(task.robot), task.objective, task.obstacle),
+            above_the_floors: Clearance::above_the_floors(
+                robot_model(task.robot),
+                task.objective,
+                task.obstacle,
+            ),
             gripper: 0.0,
             gripper_goal: -1.0,
             wait: 0,
@@ -334,7 +355,7 @@ impl PlannedExpert {
                     return;
                 }
                 let legs = if self.pushing() {
-                    self.plan_slide(env, q, object)
+                    self.plan_slide(env, q)
                 } else if self.task.objective == Objective::Shelf {
                     self.plan_shelf(env, q)
                 } else {
@@ -426,74 +447,116 @@ impl PlannedExpert {
 
     /// Push: the pads along straight lines that take the object, just off the floor, to the
     /// goal (round the goal wall's free end where the wall stands between them), the gripper
-    /// as it is, the elbow swung away from the arena where it comes close.
-    fn plan_slide(&mut self, env: &Env, q: Joints, object: Point3<f64>) -> Option<Vec<Leg>> {
+    /// as it is (past the goal wall it may turn about the vertical on the last line), the
+    /// elbow swung away from the arena where it comes close.
+    fn plan_slide(&mut self, env: &Env, q: Joints) -> Option<Vec<Leg>> {
         let carrying = self.carrying(env, &q);
-        self.slide_lines(env, &carrying, q, object)
+        let top_down = self.grasp.as_ref().is_some_and(|g| g.top_down);
+        self.slide_lines(env, &carrying, top_down, q, &object_pose(env))
             .map(|(_, legs)| legs)
     }
 
-    /// [`Self::plan_slide`]'s lines from the arm at `q` holding the object at `object` (the
-    /// elbow swung clear of the arena as `carrying` says), with the smallest gap the arm keeps
-    /// on them (the held object left out).
+    /// [`Self::plan_slide`]'s lines from the arm at `q` holding the object at `pose` (held from
+    /// above where `top_down`; the elbow swung clear of the arena as `carrying` says), with the
+    /// smallest gap kept on them: straight to the goal, the arm's own (the held object rides
+    /// just off the floor on purpose); round the goal wall, the arm's and the object's from
+    /// the arena above its floors.
     fn slide_lines(
         &self,
         env: &Env,
         carrying: &Clearance,
+        top_down: bool,
         q: Joints,
-        object: Point3<f64>,
+        pose: &Isometry3<f64>,
     ) -> Option<(f64, Vec<Leg>)> {
         let model = env.world().model;
+        let object = Point3::from(pose.translation.vector);
         let goal = env.goal();
+        let (pad, orientation) = pads_at(model, &q);
+        let offset = pad - object.coords;
         let round_the_wall = self.task.obstacle == Obstacle::GoalWall
             && goal.y > GOAL_WALL_Y
             && object.y < GOAL_WALL_Y;
-        // Past the goal wall, by one of the lanes round its free end; else straight there.
-        let lanes: Vec<Option<f64>> = if round_the_wall {
-            AROUND_GOAL_WALL_X.into_iter().map(Some).collect()
+        if !round_the_wall {
+            let to = Vector3::new(goal.x, goal.y, object.z) + offset;
+            let points = swinging_line(model, carrying, q, pad, to, orientation)?;
+            let gap = smallest_gap(model, &self.clearance, &points);
+            return Some((gap, vec![Leg::new(points)]));
+        }
+        let walls = &self
+            .above_the_floors
+            .holding(model, &q, self.task.object, pose);
+        // Past the goal wall, round its free end: diagonally to one of the lanes past the end,
+        // else first along the wall (at the object's distance from it) to the lane and then
+        // across the wall's line; from there to the goal, the gripper turned about the
+        // vertical on the way so that it ends clear of the wall's end (it held the object
+        // from the object's side of the wall), the goal itself or a little beyond it. The
+        // first such lines that keep clear, else those that come least close (the model's
+        // spheres are rounder than the links: a few mm in is often no contact).
+        let z = if top_down {
+            object.z.max(ROUND_THE_WALL_Z)
         } else {
-            vec![None]
+            object.z
         };
-        let (start_pad, orientation) = pads_at(model, &q);
-        let offset = start_pad - object.coords;
-        // The first lane whose lines keep clear, else the one that comes least close (the
-        // model's spheres are rounder than the links: a few mm in is often no contact).
+        let lanes = [false, true]
+            .into_iter()
+            .flat_map(|along| AROUND_GOAL_WALL_X.map(|x| (x, along)))
+            .filter(|&(x, along)| !along || object.x < x - ALONG_THE_WALL_FIRST);
         let mut best: Option<(f64, Vec<Leg>)> = None;
-        'lanes: for lane in lanes {
+        for (x, along) in lanes {
             let mut stops = Vec::new();
-            if let Some(x) = lane {
-                // First along the wall, at the object's distance from it, to the lane; then
-                // across the wall's line past its end: a diagonal towards the end brings the
-                // forearm over the wall's top early.
-                if object.x < x - ALONG_THE_WALL_FIRST {
-                    stops.push(Vector3::new(x, object.y, object.z));
-                }
-                stops.push(Vector3::new(x, GOAL_WALL_Y, object.z));
+            if along {
+                stops.push(Vector3::new(x, object.y, z));
             }
-            stops.push(Vector3::new(goal.x, goal.y, object.z));
-            let (mut pad, mut from) = (start_pad, q);
-            let mut legs = Vec::new();
-            let mut gap = f64::INFINITY;
-            for stop in stops {
-                let to = stop + offset;
-                let Some(points) = swinging_line(model, carrying, from, pad, to, orientation)
-                else {
-                    continue 'lanes;
+            stops.push(Vector3::new(x, GOAL_WALL_Y, z));
+            let Some((past_the_end, legs)) =
+                lines_through(model, carrying, walls, q, pad, offset, orientation, &stops)
+            else {
+                continue;
+            };
+            let from = legs.last().expect("a leg").end();
+            let from_object = stops.last().expect("a stop");
+            for (&[dx, dy], &turn) in GOAL_SHIFTS
+                .iter()
+                .flat_map(|shift| FINAL_TURNS.iter().map(move |turn| (shift, turn)))
+            {
+                let to = Vector3::new(goal.x + dx, goal.y + dy, z);
+                let points = if turn == 0.0 {
+                    swinging_line(
+                        model,
+                        carrying,
+                        from,
+                        from_object + offset,
+                        to + offset,
+                        orientation,
+                    )
+                } else {
+                    turning_line(
+                        model,
+                        carrying,
+                        from,
+                        (*from_object, to),
+                        offset,
+                        orientation,
+                        turn,
+                    )
                 };
-                // The arm's own gap: the held object rides just off the floor on purpose.
-                gap = points
-                    .iter()
-                    .map(|c| self.clearance.at(model, c))
-                    .fold(gap, f64::min);
-                from = *points.last().expect("a point");
-                pad = to;
-                legs.push(Leg::new(points));
-            }
-            if gap >= LEAST_END_CLEARANCE {
-                return Some((gap, legs));
-            }
-            if best.as_ref().is_none_or(|(g, _)| gap > *g) {
-                best = Some((gap, legs));
+                let Some(points) = points else {
+                    continue;
+                };
+                let gap = past_the_end.min(smallest_gap(model, walls, &points));
+                let mut all = legs.clone();
+                all.push(Leg::new(points));
+                if gap >= LEAST_END_CLEARANCE {
+                    return Some((gap, all));
+                }
+                // A turn or a shift must earn its place: among lines that all come close,
+                // one that comes a fraction of a millimetre less close is no better.
+                let plain = turn == 0.0 && dx == 0.0 && dy == 0.0;
+                let margin = if plain { 0.0 } else { TURN_GAIN };
+                if best.as_ref().is_none_or(|(g, _)| gap > *g + margin) {
+                    best = Some((gap, all));
+                }
             }
         }
         best
@@ -772,7 +835,6 @@ impl PlannedExpert {
     ) -> (Vec<ApproachOption>, bool) {
         let model = env.world().model;
         let pose = object_pose(env);
-        let object = Point3::from(pose.translation.vector);
         let mut ranked: Vec<(bool, ApproachOption)> = options
             .into_iter()
             .take(PLANNED_OPTIONS)
@@ -782,7 +844,7 @@ impl PlannedExpert {
                     .clearance
                     .holding(model, &grasped, self.task.object, &pose);
                 let clear = self
-                    .slide_lines(env, &carrying, grasped, object)
+                    .slide_lines(env, &carrying, option.grasp.top_down, grasped, &pose)
                     .is_some_and(|(gap, _)| gap >= LEAST_END_CLEARANCE);
                 (clear, option)
             })
@@ -991,6 +1053,72 @@ fn swinging_line(
     line_by(q, from, to, |last, p| {
         pad_ik_clear(model, clearance, last, p, orientation)
     })
+}
+
+/// Joints along the object's straight line from `from` to `to` (m), held by the pads at
+/// `offset` from it with the gripper at `orientation`, both turned about the vertical by
+/// `turn` (rad) in proportion on the way, the elbow swung clear as in [`swinging_line`];
+/// starting with `q`, `None` where the IK does not meet a point.
+fn turning_line(
+    model: &RobotModel,
+    clearance: &Clearance,
+    q: Joints,
+    (from, to): (Vector3<f64>, Vector3<f64>),
+    offset: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+    turn: f64,
+) -> Option<Vec<Joints>> {
+    let n = ((to - from).norm() / LINE_SPACING).ceil().max(1.0) as usize;
+    let mut points = vec![q];
+    for k in 1..=n {
+        let t = k as f64 / n as f64;
+        let yaw = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn * t);
+        let pad = from + (to - from) * t + yaw * offset;
+        let last = points.last().expect("q first");
+        let (solved, met) = pad_ik_clear(model, clearance, last, pad, yaw * orientation);
+        if !met {
+            return None;
+        }
+        points.push(solved);
+    }
+    Some(points)
+}
+
+/// Straight lines of the pads (at `offset` from the object, the gripper at `orientation`)
+/// taking the object from where it is to each of `stops` in turn, the arm starting at `q` with
+/// the pads at `pad` and swung clear as `carrying` says: the smallest gap from `walls` on
+/// them and the legs, or `None` where the IK does not meet a point.
+#[allow(clippy::too_many_arguments)]
+fn lines_through(
+    model: &RobotModel,
+    carrying: &Clearance,
+    walls: &Clearance,
+    q: Joints,
+    pad: Vector3<f64>,
+    offset: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+    stops: &[Vector3<f64>],
+) -> Option<(f64, Vec<Leg>)> {
+    let (mut pad, mut from) = (pad, q);
+    let mut legs = Vec::new();
+    let mut gap = f64::INFINITY;
+    for stop in stops {
+        let to = stop + offset;
+        let points = swinging_line(model, carrying, from, pad, to, orientation)?;
+        gap = gap.min(smallest_gap(model, walls, &points));
+        from = *points.last().expect("a point");
+        pad = to;
+        legs.push(Leg::new(points));
+    }
+    Some((gap, legs))
+}
+
+/// The smallest gap (m) the arm keeps from `clearance`'s arena over `points`.
+fn smallest_gap(model: &RobotModel, clearance: &Clearance, points: &[Joints]) -> f64 {
+    points
+        .iter()
+        .map(|c| clearance.at(model, c))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Points every [`LINE_SPACING`] from `from` to `to`, each turned into joints by `solve` from
