@@ -31,7 +31,7 @@ use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model
 /// datasets' noise table records it with each calibration and calibrates again where it
 /// differs; `tests/planned_expert.rs` pins a digest of a few episodes to it, so a change
 /// that moves the actions fails there until this is raised and the digest pinned anew.
-pub const PLANNED_EXPERT_REVISION: u32 = 4;
+pub const PLANNED_EXPERT_REVISION: u32 = 5;
 
 /// Control steps the gripper is given to open or close: its command moves 0.25 per step
 /// (8 steps end to end), and the fingers follow.
@@ -89,9 +89,10 @@ const ROUND_THE_WALL_Z: f64 = 0.885;
 /// the goal, or a little further from the wall's end, which the gripper of a side grasp then
 /// clears more easily.
 const GOAL_SHIFTS: [[f64; 2]; 2] = [[0.0, 0.0], [0.015, 0.015]];
-/// Turns (rad) about the vertical the gripper may make on the way from past the goal wall's
-/// end to the goal: a gripper that held the object from the object's side of the wall
-/// otherwise ends reaching back across the wall's line, right by its end.
+/// Turns (rad) about the vertical the gripper may make on a push's last line, from past the
+/// goal wall's end to the goal (a gripper that held the object from the object's side of the
+/// wall otherwise ends reaching back across the wall's line, right by its end) or from behind
+/// the door (where the gripper reached in through the opening).
 const FINAL_TURNS: [f64; 7] = [0.0, 0.4, -0.4, 0.8, -0.8, 1.2, -1.2];
 /// How much more gap (m) turned or shifted lines must keep than the best so far to replace it.
 const TURN_GAIN: f64 = 0.005;
@@ -477,15 +478,40 @@ impl PlannedExpert {
         let round_the_wall = self.task.obstacle == Obstacle::GoalWall
             && goal.y > GOAL_WALL_Y
             && object.y < GOAL_WALL_Y;
+        let walls = || {
+            self.above_the_floors
+                .holding(model, &q, self.task.object, pose)
+        };
         if !round_the_wall {
-            let to = Vector3::new(goal.x, goal.y, object.z) + offset;
-            let points = swinging_line(model, carrying, q, pad, to, orientation)?;
-            let gap = smallest_gap(model, &self.clearance, &points);
-            return Some((gap, vec![Leg::new(points)]));
+            let to = Vector3::new(goal.x, goal.y, object.z);
+            if self.task.obstacle != Obstacle::ObjectDoor {
+                let points = swinging_line(model, carrying, q, pad, to + offset, orientation)?;
+                let gap = smallest_gap(model, &self.clearance, &points);
+                return Some((gap, vec![Leg::new(points)]));
+            }
+            // Out from behind the door towards bin 2, the gripper, which reached in through the
+            // opening, swings into the door's post: it may turn about the vertical on the way
+            // (the first line that keeps clear of the arena above its floors, else the least
+            // close).
+            let walls = &walls();
+            let mut best: Option<(f64, Vec<Leg>)> = None;
+            for &turn in &FINAL_TURNS {
+                let line = (object.coords, to);
+                let Some(points) = last_line(model, carrying, q, line, offset, orientation, turn)
+                else {
+                    continue;
+                };
+                let gap = smallest_gap(model, walls, &points);
+                if gap >= LEAST_END_CLEARANCE {
+                    return Some((gap, vec![Leg::new(points)]));
+                }
+                if keeps_more(&best, gap, turn == 0.0) {
+                    best = Some((gap, vec![Leg::new(points)]));
+                }
+            }
+            return best;
         }
-        let walls = &self
-            .above_the_floors
-            .holding(model, &q, self.task.object, pose);
+        let walls = &walls();
         // Past the goal wall, round its free end: diagonally to one of the lanes past the end,
         // else first along the wall (at the object's distance from it) to the lane and then
         // across the wall's line; from there to the goal, the gripper turned about the
@@ -521,27 +547,10 @@ impl PlannedExpert {
                 .flat_map(|shift| FINAL_TURNS.iter().map(move |turn| (shift, turn)))
             {
                 let to = Vector3::new(goal.x + dx, goal.y + dy, z);
-                let points = if turn == 0.0 {
-                    swinging_line(
-                        model,
-                        carrying,
-                        from,
-                        from_object + offset,
-                        to + offset,
-                        orientation,
-                    )
-                } else {
-                    turning_line(
-                        model,
-                        carrying,
-                        from,
-                        (*from_object, to),
-                        offset,
-                        orientation,
-                        turn,
-                    )
-                };
-                let Some(points) = points else {
+                let line = (*from_object, to);
+                let Some(points) =
+                    last_line(model, carrying, from, line, offset, orientation, turn)
+                else {
                     continue;
                 };
                 let gap = past_the_end.min(smallest_gap(model, walls, &points));
@@ -550,11 +559,7 @@ impl PlannedExpert {
                 if gap >= LEAST_END_CLEARANCE {
                     return Some((gap, all));
                 }
-                // A turn or a shift must earn its place: among lines that all come close,
-                // one that comes a fraction of a millimetre less close is no better.
-                let plain = turn == 0.0 && dx == 0.0 && dy == 0.0;
-                let margin = if plain { 0.0 } else { TURN_GAIN };
-                if best.as_ref().is_none_or(|(g, _)| gap > *g + margin) {
+                if keeps_more(&best, gap, turn == 0.0 && dx == 0.0 && dy == 0.0) {
                     best = Some((gap, all));
                 }
             }
@@ -1053,6 +1058,33 @@ fn swinging_line(
     line_by(q, from, to, |last, p| {
         pad_ik_clear(model, clearance, last, p, orientation)
     })
+}
+
+/// Whether lines keeping `gap` (m) replace `best`: they keep more, and a turned or shifted
+/// variant (not `plain`) by [`TURN_GAIN`] more — among lines that all come close, one that
+/// comes a fraction of a millimetre less close is no better.
+fn keeps_more(best: &Option<(f64, Vec<Leg>)>, gap: f64, plain: bool) -> bool {
+    let margin = if plain { 0.0 } else { TURN_GAIN };
+    best.as_ref().is_none_or(|(g, _)| gap > *g + margin)
+}
+
+/// A push's last line: [`swinging_line`] of the pads where `turn` is 0, else
+/// [`turning_line`]; the object from `line.0` to `line.1`, held by the pads at `offset` from it.
+fn last_line(
+    model: &RobotModel,
+    carrying: &Clearance,
+    q: Joints,
+    line: (Vector3<f64>, Vector3<f64>),
+    offset: Vector3<f64>,
+    orientation: UnitQuaternion<f64>,
+    turn: f64,
+) -> Option<Vec<Joints>> {
+    if turn == 0.0 {
+        let (from, to) = line;
+        swinging_line(model, carrying, q, from + offset, to + offset, orientation)
+    } else {
+        turning_line(model, carrying, q, line, offset, orientation, turn)
+    }
 }
 
 /// Joints along the object's straight line from `from` to `to` (m), held by the pads at
