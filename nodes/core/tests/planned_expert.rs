@@ -68,8 +68,6 @@ fn the_planned_expert_pushes_the_plate_from_behind_the_object_wall() {
     assert_solves("IIWA/plate/object_wall/push", &[0, 1]);
 }
 
-/// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
-/// into a fresh environment they give the same observations, rewards and success, bit for bit.
 /// Pushes past the goal wall it failed before (2026-11-30, seeds 0–9: the Jaco's plate 0 of
 /// 10, its box 2) and solves now: the plate held by its rim, the gripper turned about the
 /// vertical on the way from the wall's end to the goal so that it does not end reaching back
@@ -89,6 +87,8 @@ fn the_planned_expert_pushes_the_plate_out_from_behind_the_door() {
     assert_solves("Gen3/plate/object_door/push", &[0, 1]);
 }
 
+/// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
+/// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
 fn an_expert_episode_replays_from_its_stored_actions() {
     let task: TaskSpec = "Gen3/hollow_box/no_obstacle/pick_place".parse().unwrap();

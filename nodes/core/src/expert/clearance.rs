@@ -603,9 +603,9 @@ mod tests {
         );
     }
 
-    /// Above the floors, the model keeps every solid but the bins' floors: a pose whose fingers
-    /// reach into bin 1's floor, and nothing else near, comes close only with the floors in;
-    /// one with the hand on the goal wall's top comes just as close either way.
+    /// Above the floors, the model keeps every solid but the bins' floors: a sphere sunk in bin
+    /// 1's floor, with nothing else near, comes close only with the floors in; one on the goal
+    /// wall's top comes just as close either way.
     #[test]
     fn above_the_floors_leaves_out_the_floors_and_only_them() {
         let (objective, obstacle) = (Objective::Push, Obstacle::GoalWall);

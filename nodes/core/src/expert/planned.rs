@@ -448,8 +448,8 @@ impl PlannedExpert {
 
     /// Push: the pads along straight lines that take the object, just off the floor, to the
     /// goal (round the goal wall's free end where the wall stands between them), the gripper
-    /// as it is (past the goal wall it may turn about the vertical on the last line), the
-    /// elbow swung away from the arena where it comes close.
+    /// as it is (past the goal wall or out from behind the door it may turn about the vertical
+    /// on the last line), the elbow swung away from the arena where it comes close.
     fn plan_slide(&mut self, env: &Env, q: Joints) -> Option<Vec<Leg>> {
         let carrying = self.carrying(env, &q);
         let top_down = self.grasp.as_ref().is_some_and(|g| g.top_down);
@@ -460,8 +460,8 @@ impl PlannedExpert {
     /// [`Self::plan_slide`]'s lines from the arm at `q` holding the object at `pose` (held from
     /// above where `top_down`; the elbow swung clear of the arena as `carrying` says), with the
     /// smallest gap kept on them: straight to the goal, the arm's own (the held object rides
-    /// just off the floor on purpose); round the goal wall, the arm's and the object's from
-    /// the arena above its floors.
+    /// just off the floor on purpose); round the goal wall or out from behind the door, the
+    /// arm's and the object's from the arena above its floors.
     fn slide_lines(
         &self,
         env: &Env,
@@ -478,82 +478,69 @@ impl PlannedExpert {
         let round_the_wall = self.task.obstacle == Obstacle::GoalWall
             && goal.y > GOAL_WALL_Y
             && object.y < GOAL_WALL_Y;
-        let walls = || {
-            self.above_the_floors
-                .holding(model, &q, self.task.object, pose)
-        };
-        if !round_the_wall {
-            let to = Vector3::new(goal.x, goal.y, object.z);
-            if self.task.obstacle != Obstacle::ObjectDoor {
-                let points = swinging_line(model, carrying, q, pad, to + offset, orientation)?;
-                let gap = smallest_gap(model, &self.clearance, &points);
-                return Some((gap, vec![Leg::new(points)]));
-            }
-            // Out from behind the door towards bin 2, the gripper, which reached in through the
-            // opening, swings into the door's post: it may turn about the vertical on the way
-            // (the first line that keeps clear of the arena above its floors, else the least
-            // close).
-            let walls = &walls();
-            let mut best: Option<(f64, Vec<Leg>)> = None;
-            for &turn in &FINAL_TURNS {
-                let line = (object.coords, to);
-                let Some(points) = last_line(model, carrying, q, line, offset, orientation, turn)
-                else {
-                    continue;
-                };
-                let gap = smallest_gap(model, walls, &points);
-                if gap >= LEAST_END_CLEARANCE {
-                    return Some((gap, vec![Leg::new(points)]));
-                }
-                if keeps_more(&best, gap, turn == 0.0) {
-                    best = Some((gap, vec![Leg::new(points)]));
-                }
-            }
-            return best;
+        if !round_the_wall && self.task.obstacle != Obstacle::ObjectDoor {
+            let to = Vector3::new(goal.x, goal.y, object.z) + offset;
+            let points = swinging_line(model, carrying, q, pad, to, orientation)?;
+            let gap = smallest_gap(model, &self.clearance, &points);
+            return Some((gap, vec![Leg::new(points)]));
         }
-        let walls = &walls();
-        // Past the goal wall, round its free end: diagonally to one of the lanes past the end,
-        // else first along the wall (at the object's distance from it) to the lane and then
-        // across the wall's line; from there to the goal, the gripper turned about the
-        // vertical on the way so that it ends clear of the wall's end (it held the object
-        // from the object's side of the wall), the goal itself or a little beyond it. The
-        // first such lines that keep clear, else those that come least close (the model's
-        // spheres are rounder than the links: a few mm in is often no contact).
-        let z = if top_down {
-            object.z.max(ROUND_THE_WALL_Z)
+        let walls = &self
+            .above_the_floors
+            .holding(model, &q, self.task.object, pose);
+        // Routes to where the last line to the goal starts, that line's ends, and the object's
+        // height on the way. Past the goal wall, round its free end: diagonally to one of the
+        // lanes past the end, else first along the wall (at the object's distance from it) to
+        // the lane and then across the wall's line; a top-grasped object as high as a push
+        // allows; the last line ends at the goal or a little beyond it. Out from behind the
+        // door, straight there (the gripper reached in through the opening).
+        let (z, routes, ends) = if round_the_wall {
+            let z = if top_down {
+                object.z.max(ROUND_THE_WALL_Z)
+            } else {
+                object.z
+            };
+            let routes = [false, true]
+                .into_iter()
+                .flat_map(|along| AROUND_GOAL_WALL_X.map(|x| (x, along)))
+                .filter(|&(x, along)| !along || object.x < x - ALONG_THE_WALL_FIRST)
+                .map(|(x, along)| {
+                    let mut stops = Vec::new();
+                    if along {
+                        stops.push(Vector3::new(x, object.y, z));
+                    }
+                    stops.push(Vector3::new(x, GOAL_WALL_Y, z));
+                    stops
+                })
+                .collect::<Vec<_>>();
+            (z, routes, &GOAL_SHIFTS[..])
         } else {
-            object.z
+            (object.z, vec![Vec::new()], &[[0.0, 0.0]][..])
         };
-        let lanes = [false, true]
-            .into_iter()
-            .flat_map(|along| AROUND_GOAL_WALL_X.map(|x| (x, along)))
-            .filter(|&(x, along)| !along || object.x < x - ALONG_THE_WALL_FIRST);
+        // On the last line the gripper may turn about the vertical so that it ends clear of the
+        // wall's end (it held the object from the object's side of the wall) or of the door's
+        // post. The first lines that keep clear, else those that come least close (the model's
+        // spheres are rounder than the links: a few mm in is often no contact).
         let mut best: Option<(f64, Vec<Leg>)> = None;
-        for (x, along) in lanes {
-            let mut stops = Vec::new();
-            if along {
-                stops.push(Vector3::new(x, object.y, z));
-            }
-            stops.push(Vector3::new(x, GOAL_WALL_Y, z));
-            let Some((past_the_end, legs)) =
+        for stops in routes {
+            let Some((on_the_way, legs)) =
                 lines_through(model, carrying, walls, q, pad, offset, orientation, &stops)
             else {
                 continue;
             };
-            let from = legs.last().expect("a leg").end();
-            let from_object = stops.last().expect("a stop");
-            for (&[dx, dy], &turn) in GOAL_SHIFTS
+            let from = legs.last().map_or(q, Leg::end);
+            let from_object = stops.last().copied().unwrap_or(object.coords);
+            for (&[dx, dy], &turn) in ends
                 .iter()
                 .flat_map(|shift| FINAL_TURNS.iter().map(move |turn| (shift, turn)))
             {
                 let to = Vector3::new(goal.x + dx, goal.y + dy, z);
-                let line = (*from_object, to);
+                let line = (from_object, to);
                 let Some(points) =
                     last_line(model, carrying, from, line, offset, orientation, turn)
                 else {
                     continue;
                 };
-                let gap = past_the_end.min(smallest_gap(model, walls, &points));
+                let gap = on_the_way.min(smallest_gap(model, walls, &points));
                 let mut all = legs.clone();
                 all.push(Leg::new(points));
                 if gap >= LEAST_END_CLEARANCE {
@@ -1042,7 +1029,9 @@ fn line(
     to: Vector3<f64>,
     orientation: UnitQuaternion<f64>,
 ) -> Option<Vec<Joints>> {
-    line_by(q, from, to, |last, p| pad_ik(model, last, p, orientation))
+    line_by(q, from, to, |last, p, _| {
+        pad_ik(model, last, p, orientation)
+    })
 }
 
 /// [`line`], the arm swung away from the arena in the IK's null space wherever a link comes
@@ -1055,7 +1044,7 @@ fn swinging_line(
     to: Vector3<f64>,
     orientation: UnitQuaternion<f64>,
 ) -> Option<Vec<Joints>> {
-    line_by(q, from, to, |last, p| {
+    line_by(q, from, to, |last, p, _| {
         pad_ik_clear(model, clearance, last, p, orientation)
     })
 }
@@ -1100,20 +1089,10 @@ fn turning_line(
     orientation: UnitQuaternion<f64>,
     turn: f64,
 ) -> Option<Vec<Joints>> {
-    let n = ((to - from).norm() / LINE_SPACING).ceil().max(1.0) as usize;
-    let mut points = vec![q];
-    for k in 1..=n {
-        let t = k as f64 / n as f64;
+    line_by(q, from, to, |last, p, t| {
         let yaw = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn * t);
-        let pad = from + (to - from) * t + yaw * offset;
-        let last = points.last().expect("q first");
-        let (solved, met) = pad_ik_clear(model, clearance, last, pad, yaw * orientation);
-        if !met {
-            return None;
-        }
-        points.push(solved);
-    }
-    Some(points)
+        pad_ik_clear(model, clearance, last, p + yaw * offset, yaw * orientation)
+    })
 }
 
 /// Straight lines of the pads (at `offset` from the object, the gripper at `orientation`)
@@ -1154,19 +1133,20 @@ fn smallest_gap(model: &RobotModel, clearance: &Clearance, points: &[Joints]) ->
 }
 
 /// Points every [`LINE_SPACING`] from `from` to `to`, each turned into joints by `solve` from
-/// the joints of the one before (`q` first): the joints, `q` included, or `None` where
-/// `solve` does not meet a point.
+/// the joints of the one before (`q` first) and how far along the line it is (0…1): the
+/// joints, `q` included, or `None` where `solve` does not meet a point.
 fn line_by(
     q: Joints,
     from: Vector3<f64>,
     to: Vector3<f64>,
-    mut solve: impl FnMut(&Joints, Vector3<f64>) -> (Joints, bool),
+    mut solve: impl FnMut(&Joints, Vector3<f64>, f64) -> (Joints, bool),
 ) -> Option<Vec<Joints>> {
     let n = ((to - from).norm() / LINE_SPACING).ceil().max(1.0) as usize;
     let mut points = vec![q];
     for k in 1..=n {
-        let p = from + (to - from) * (k as f64 / n as f64);
-        let (solved, met) = solve(points.last().expect("q first"), p);
+        let t = k as f64 / n as f64;
+        let p = from + (to - from) * t;
+        let (solved, met) = solve(points.last().expect("q first"), p, t);
         if !met {
             return None;
         }
