@@ -87,6 +87,16 @@ fn the_planned_expert_pushes_the_plate_out_from_behind_the_door() {
     assert_solves("Gen3/plate/object_door/push", &[0, 1]);
 }
 
+/// Shelf tasks it failed before (2026-11-30, seeds 0–9: the IIWA's box past the goal wall and
+/// the Gen3's dumbbell with no obstacle, 0 of 10 each; now 10 and 9) and solves now: where no way in at
+/// mid-height keeps clear (the IIWA's forearm crossing the goal wall's end at its top), the
+/// object goes in 3 cm higher and 5 cm less deep.
+#[test]
+fn the_planned_expert_puts_the_object_in_the_shelf_a_higher_way() {
+    assert_solves("IIWA/box/goal_wall/shelf", &[0]);
+    assert_solves("Gen3/dumbbell/no_obstacle/shelf", &[1]);
+}
+
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
@@ -122,7 +132,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 /// The digest of the actions [`PLANNED_EXPERT_REVISION`] stands for: one episode of each
 /// objective and object, and a push out from behind the door, 300 steps each, every action's 8
 /// numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (5, 0x54811c30dc4039e2);
+const REVISION_DIGEST: (u32, u64) = (6, 0xf234ad6005717046);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {
