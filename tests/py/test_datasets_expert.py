@@ -138,6 +138,7 @@ def test_calibrate_medium_writes_and_extends_a_table(tmp_path):
     # next calibration replaces it.
     stale = medium.NoiseTable.load(out)
     stale.tasks[EASY].expert_revision = medium.EXPERT_REVISION + 1
+    stale.tasks[EASY].noise = stale_noise = 0.37
     stale.save(out)
     notes = []
     calibration, source = medium.noise_for(datasets.select_tasks([EASY])[0], 0.3, 500,
@@ -145,9 +146,12 @@ def test_calibrate_medium_writes_and_extends_a_table(tmp_path):
                                            progress=notes.append)
     assert source == "measured when this file was generated" and calibration.current
     assert f"measured with expert revision {medium.EXPERT_REVISION + 1}" in notes[0], notes
+    # The search begins at the stale entry's noise (after the expert's own rate, unnoised).
+    assert calibration.trials[1][0] == stale_noise, calibration.trials
     third = cli("calibrate-medium", "--tasks", EASY, "--episodes", "6", "--out", str(out))
     assert third.returncode == 0 and "calibrating it again" in third.stderr, third.stderr
-    assert medium.NoiseTable.load(out).tasks[EASY].current
+    recalibrated = medium.NoiseTable.load(out).tasks[EASY]
+    assert recalibrated.current and recalibrated.trials[1][0] == stale_noise
 
 
 def test_bad_calibration_input_is_refused(tmp_path):

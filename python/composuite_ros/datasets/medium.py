@@ -80,11 +80,16 @@ def success_rate(task: str, noise: float, *, episodes: int = DEFAULT_EPISODES,
 
 def calibrate(task: str, target: float = DEFAULT_TARGET, *, episodes: int = DEFAULT_EPISODES,
               first_seed: int = FIRST_SEED, threads: int = 1, horizon: int = 500,
+              start: float | None = None,
               progress: Callable[[str], None] | None = None) -> Calibration:
     """Search the noise that makes `task`'s expert succeed at `target` (within 0.05). Where the
     expert itself is not above the target, the noise is 0 (medium is the expert there); where
     even the most noise leaves it above, the most noise is kept. The measurement closest to the
-    target is chosen, and it is what `success` says."""
+    target is chosen, and it is what `success` says.
+
+    The search begins at `start` where it is given and positive (the noise an earlier revision
+    of the expert was calibrated to: after a change to a few of the expert's moves it is mostly
+    still on target, and the search ends with that one measurement), else at 1."""
     check_target(target)
 
     def measure(noise: float) -> float:
@@ -105,7 +110,8 @@ def calibrate(task: str, target: float = DEFAULT_TARGET, *, episodes: int = DEFA
     # The noise known to leave the rate above the target (low) and below it (high), and the
     # rates measured there; between two, the next try interpolates on log(noise).
     (low, rate_low), (high, rate_high) = (0.0, expert), (math.inf, 0.0)
-    noise = FIRST_NOISE
+    noise = (min(max(start, NOISE_RANGE[0]), NOISE_RANGE[1])
+             if start is not None and start > 0 else FIRST_NOISE)
     for _ in range(MAX_TRIALS):
         rate = measure(noise)
         if abs(rate - target) <= TOLERANCE:
@@ -192,7 +198,7 @@ def noise_for(task: TaskNames, target: float, horizon: int, *, table: str | os.P
                f"no calibration for target {target:g} in {Path(table).name}")
         progress(f"medium/{task.folder}: {why}; calibrating now ({episodes} episodes a try)")
     return (calibrate(name, target, episodes=episodes, threads=threads, horizon=horizon,
-                      progress=progress),
+                      start=entry.noise if entry is not None else None, progress=progress),
             "measured when this file was generated")
 
 
@@ -225,8 +231,10 @@ def calibrate_table(tasks: Sequence[TaskNames], out: str | os.PathLike, *,
         if old_entry is not None and not old_entry.current and progress:
             progress(f"medium/{name}: in {out} for expert revision {old_entry.expert_revision}, "
                      f"this expert is revision {EXPERT_REVISION}: calibrating it again")
+        # An entry of an earlier revision: its noise is where the search begins.
         table.tasks[name] = calibrate(name, target, episodes=episodes, threads=threads,
-                                      horizon=horizon, progress=progress)
+                                      horizon=horizon, progress=progress,
+                                      start=old_entry.noise if old_entry is not None else None)
         table.save(out)
     return table
 
