@@ -31,7 +31,7 @@ use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model
 /// datasets' noise table records it with each calibration and calibrates again where it
 /// differs; `tests/planned_expert.rs` pins a digest of a few episodes to it, so a change
 /// that moves the actions fails there until this is raised and the digest pinned anew.
-pub const PLANNED_EXPERT_REVISION: u32 = 6;
+pub const PLANNED_EXPERT_REVISION: u32 = 7;
 
 /// Control steps the gripper is given to open or close: its command moves 0.25 per step
 /// (8 steps end to end), and the fingers follow.
@@ -139,6 +139,9 @@ const LIFT: f64 = 0.04;
 const RISE_CHECK: f64 = 0.025;
 /// How far (m) the pads move away after letting go.
 const RETREAT: f64 = 0.08;
+/// Turns (rad) about the vertical of a side grasp's way out over the trash can, tried in this
+/// order where backing straight out comes close to the arena ([`PlannedExpert::back_out`]).
+const BACK_OUT_TURNS: [f64; 5] = [0.0, 0.5, -0.5, 1.0, -1.0];
 /// The least clearance (m) a pre-grasp or the carry's end may keep from the arena: the
 /// fingers of a side grasp come within millimetres of the floor, and the model's spheres
 /// round them outwards.
@@ -427,16 +430,20 @@ impl PlannedExpert {
                 // upper disc with them); else straight up.
                 let pointing = orientation * Vector3::z();
                 let level = Vector3::new(pointing.x, pointing.y, 0.0);
-                let side = self.grasp.is_some_and(|g| !g.top_down);
+                let backing_out = self.grasp.is_some_and(|g| !g.top_down) && level.norm() > 0.3;
                 let away = if self.task.objective == Objective::Shelf && self.grasp.is_some() {
                     -Vector3::y()
-                } else if side && level.norm() > 0.3 {
+                } else if backing_out {
                     -level.normalize()
                 } else {
                     Vector3::z()
                 };
-                let up = pad + away * RETREAT;
-                match line(model, q, pad, up, orientation) {
+                let points = if backing_out && self.task.objective == Objective::TrashCan {
+                    self.back_out(model, q, pad, away, orientation)
+                } else {
+                    line(model, q, pad, pad + away * RETREAT, orientation)
+                };
+                match points {
                     Some(points) => self.start(Leg::new(points)),
                     None => self.hold(q),
                 }
@@ -461,6 +468,38 @@ impl PlannedExpert {
         self.gripper_goal = -1.0;
         self.wait = GRIP_STEPS;
         self.hold(q);
+    }
+
+    /// A side grasp's way out over the trash can, the pads from `pad` along `away` (level,
+    /// back along the gripper): a dumbbell hangs on the open fingers by its upper disc until
+    /// they back out from under it. Where that line comes closer to the arena above its floors
+    /// than [`LEAST_END_CLEARANCE`] (past the goal wall the wrist backs into the wall), the way
+    /// out turns about the vertical ([`BACK_OUT_TURNS`]): the first line that keeps clear, else
+    /// the one that comes least close (a turned one by [`TURN_GAIN`] more than the straight).
+    fn back_out(
+        &self,
+        model: &RobotModel,
+        q: Joints,
+        pad: Vector3<f64>,
+        away: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+    ) -> Option<Vec<Joints>> {
+        let mut best: Option<(f64, Vec<Joints>)> = None;
+        for turn in BACK_OUT_TURNS {
+            let way = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn) * away;
+            let Some(points) = line(model, q, pad, pad + way * RETREAT, orientation) else {
+                continue;
+            };
+            let gap = smallest_gap(model, &self.above_the_floors, &points[1..]);
+            if gap >= LEAST_END_CLEARANCE {
+                return Some(points);
+            }
+            let margin = if turn == 0.0 { 0.0 } else { TURN_GAIN };
+            if best.as_ref().is_none_or(|(least, _)| gap > least + margin) {
+                best = Some((gap, points));
+            }
+        }
+        best.map(|(_, points)| points)
     }
 
     /// The arena's clearance model with the object, where it is now, carried by the hand.
