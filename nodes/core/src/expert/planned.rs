@@ -31,7 +31,7 @@ use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model
 /// datasets' noise table records it with each calibration and calibrates again where it
 /// differs; `tests/planned_expert.rs` pins a digest of a few episodes to it, so a change
 /// that moves the actions fails there until this is raised and the digest pinned anew.
-pub const PLANNED_EXPERT_REVISION: u32 = 7;
+pub const PLANNED_EXPERT_REVISION: u32 = 8;
 
 /// Control steps the gripper is given to open or close: its command moves 0.25 per step
 /// (8 steps end to end), and the fingers follow.
@@ -515,8 +515,9 @@ impl PlannedExpert {
 
     /// Push: the pads along straight lines that take the object, just off the floor, to the
     /// goal (round the goal wall's free end where the wall stands between them), the gripper
-    /// as it is (past the goal wall or out from behind the door it may turn about the vertical
-    /// on the last line), the elbow swung away from the arena where it comes close.
+    /// as it is (past the goal wall, out from behind the door, or where the IK loses the line
+    /// with the gripper as it is, it may turn about the vertical on the last line), the elbow
+    /// swung away from the arena where it comes close.
     fn plan_slide(&mut self, env: &Env, q: Joints) -> Option<Vec<Leg>> {
         let carrying = self.carrying(env, &q);
         let top_down = self.grasp.as_ref().is_some_and(|g| g.top_down);
@@ -527,8 +528,8 @@ impl PlannedExpert {
     /// [`Self::plan_slide`]'s lines from the arm at `q` holding the object at `pose` (held from
     /// above where `top_down`; the elbow swung clear of the arena as `carrying` says), with the
     /// smallest gap kept on them: straight to the goal, the arm's own (the held object rides
-    /// just off the floor on purpose); round the goal wall or out from behind the door, the
-    /// arm's and the object's from the arena above its floors.
+    /// just off the floor on purpose); round the goal wall, out from behind the door, or
+    /// turning, the arm's and the object's from the arena above its floors.
     fn slide_lines(
         &self,
         env: &Env,
@@ -547,9 +548,12 @@ impl PlannedExpert {
             && object.y < GOAL_WALL_Y;
         if !round_the_wall && self.task.obstacle != Obstacle::ObjectDoor {
             let to = Vector3::new(goal.x, goal.y, object.z) + offset;
-            let points = swinging_line(model, carrying, q, pad, to, orientation)?;
-            let gap = smallest_gap(model, &self.clearance, &points);
-            return Some((gap, vec![Leg::new(points)]));
+            if let Some(points) = swinging_line(model, carrying, q, pad, to, orientation) {
+                let gap = smallest_gap(model, &self.clearance, &points);
+                return Some((gap, vec![Leg::new(points)]));
+            }
+            // The IK loses the straight line with the gripper held as it is: the same line,
+            // the gripper turning on the way, below.
         }
         let walls = &self
             .above_the_floors
@@ -559,7 +563,8 @@ impl PlannedExpert {
         // lanes past the end, else first along the wall (at the object's distance from it) to
         // the lane and then across the wall's line; a top-grasped object as high as a push
         // allows; the last line ends at the goal or a little beyond it. Out from behind the
-        // door, straight there (the gripper reached in through the opening).
+        // door (the gripper reached in through the opening), or where the straight line with
+        // the gripper as it is was lost, straight there.
         let (z, routes, ends) = if round_the_wall {
             let z = if top_down {
                 object.z.max(ROUND_THE_WALL_Z)
