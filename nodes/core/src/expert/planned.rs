@@ -130,8 +130,8 @@ const SHELF_YAWS: [f64; 3] = [0.0, 0.35, -0.35];
 /// 0.1 rad less for the wrist to turn on the way (~13 control steps); the clearance model
 /// decides how far its housing clears the top block.
 const SHELF_PITCHES: [f64; 4] = [0.6, 0.4, 0.2, 0.0];
-/// …or higher, so the object's bottom stays this far (m) above the board (top 0.945): the
-/// upright dumbbell reaches 5.2 cm below its origin.
+/// How far (m) the object's bottom stays above the board (top 0.945) as it goes in, whatever
+/// the way's height: the upright dumbbell reaches 5.2 cm below its origin.
 const SHELF_BOARD_CLEARANCE: f64 = 0.015;
 /// How far (m) the pads rise straight from the grasp before the carry: off the floor.
 const LIFT: f64 = 0.04;
