@@ -494,8 +494,7 @@ impl PlannedExpert {
             if gap >= LEAST_END_CLEARANCE {
                 return Some(points);
             }
-            let margin = if turn == 0.0 { 0.0 } else { TURN_GAIN };
-            if best.as_ref().is_none_or(|(least, _)| gap > least + margin) {
+            if keeps_more(&best, gap, turn == 0.0) {
                 best = Some((gap, points));
             }
         }
@@ -1142,7 +1141,7 @@ fn swinging_line(
 /// Whether lines keeping `gap` (m) replace `best`: they keep more, and a turned or shifted
 /// variant (not `plain`) by [`TURN_GAIN`] more — among lines that all come close, one that
 /// comes a fraction of a millimetre less close is no better.
-fn keeps_more(best: &Option<(f64, Vec<Leg>)>, gap: f64, plain: bool) -> bool {
+fn keeps_more<T>(best: &Option<(f64, T)>, gap: f64, plain: bool) -> bool {
     let margin = if plain { 0.0 } else { TURN_GAIN };
     best.as_ref().is_none_or(|(g, _)| gap > *g + margin)
 }
