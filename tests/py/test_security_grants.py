@@ -133,5 +133,6 @@ def test_an_agent_in_an_enclave_made_from_an_sros2_policy_plays(peer, suite, key
     """create-enclave --policy: the permissions an sros2 policy gives the agent's endpoints
     (relative names in the profile's namespace, a service it calls) let it play."""
     done = run_agent(peer, domain, keystore / "enclaves" / "from_policy", 3)
-    assert done.returncode == 0, done.stderr[-3000:]
+    process, text = suite
+    assert done.returncode == 0, f"{done.stderr[-3000:]}\n---- suite ----\n{text()[-3000:]}"
     assert [json.loads(line).get("step") for line in done.stdout.splitlines()][1:] == [0, 1, 2, 3]

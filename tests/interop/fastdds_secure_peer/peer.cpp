@@ -535,9 +535,23 @@ int main(int argc, char** argv) {
     std::_Exit(matched() == 0 && obs.empty() && js.empty() ? 0 : 1);
   }
 
+  // Which of ours found no match: named in the failure, so a refusal (or a key exchange that
+  // never finished) points at its topic.
+  auto unmatched = [&]() {
+    PublicationMatchedStatus p;
+    SubscriptionMatchedStatus s;
+    std::string names;
+    for (DataWriter* w : {command, request})
+      if (!(w->get_publication_matched_status(p) == ReturnCode_t::RETCODE_OK && p.current_count > 0))
+        names += " " + w->get_topic()->get_name();
+    for (DataReader* r : {states, observations, rewards, reply})
+      if (!(r->get_subscription_matched_status(s) == ReturnCode_t::RETCODE_OK && s.current_count > 0))
+        names += " " + r->get_topicdescription()->get_name();
+    return names;
+  };
   if (!wait_for(30.0, [&] { return matched() == 6; }))
     fail("the suite's endpoints did not all match within 30 s (" + std::to_string(matched()) +
-         " of 6): authentication or access control refused?");
+         " of 6; not matched:" + unmatched() + "): authentication or access control refused?");
   std::fprintf(stderr, "peer: all 6 endpoints matched\n");
 
   // A reset as rmw_fastrtps' client sends it: the reply reader's GUID in the request's
