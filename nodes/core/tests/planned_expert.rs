@@ -196,7 +196,7 @@ fn the_expert_revision_names_its_actions() {
         (PLANNED_EXPERT_REVISION, digest),
         REVISION_DIGEST,
         "the planned expert's actions are not those of revision {}: if that is meant, raise \
-         PLANNED_EXPERT_REVISION (expert/planned.rs), pin (revision, digest) here, and \
+         PLANNED_EXPERT_REVISION (expert/planned/mod.rs), pin (revision, digest) here, and \
          calibrate the noise table's test tasks again (docs/src/offline-datasets.md)",
         REVISION_DIGEST.0
     );

@@ -37,7 +37,7 @@ _NOT_GENERATED = {
                      "`composuite-dataset subsample RUN.hdf5`",
 }
 
-_EXPERT = ("the planned expert (nodes/core/src/expert/planned.rs): joint-space plans followed "
+_EXPERT = ("the planned expert (nodes/core/src/expert/planned/): joint-space plans followed "
            "with the reference's controller")
 
 

@@ -1,0 +1,204 @@
+//! The way into a grasp: of the candidates (`grasp.rs`) whose pre-grasp and straight descent
+//! keep clear of the arena and the object, the one with the least joint travel that has a
+//! planned path; side grasps towards bin 2 first, then every other heading, then (the
+//! dumbbell) pitched steeper.
+
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+
+use super::lines::line;
+use super::{LEAST_END_CLEARANCE, PlannedExpert, off_the_limits, quicker};
+use crate::axes::Object;
+use crate::env::Env;
+use crate::expert::clearance::Clearance;
+use crate::expert::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
+use crate::expert::motion::pad_ik_solutions;
+use crate::expert::track::{Joints, joint_distance};
+
+/// Pre-grasps a path is searched to, cheapest first: a search that finds nothing grows its
+/// whole tree, and behind the door 80 candidates could all fail in turn.
+pub(super) const PLANNED_OPTIONS: usize = 8;
+/// The longest straight stretch (m) into a top grasp.
+const TOP_BACKOFF: f64 = 0.06;
+/// Leans (rad) of a top grasp's approach towards the robot, tried in turn.
+const GRASP_TILTS: [f64; 2] = [0.0, 0.45];
+/// What a leaning grasp counts as in joint travel (rad) when grasps are compared.
+const LEANING: f64 = 10.0;
+/// How far (m) above the plate's disc centre the pads aim: the lower finger slides in 1.3 cm
+/// over bin 1's floor, and the tracker's few mm of sag put it on the floor on some seeds
+/// (the Panda stalled there: 11 of 20 episodes without an obstacle, 19 of 20 raised).
+const PLATE_GRASP_RAISE: f64 = 0.003;
+
+/// A way into a grasp: what it costs (joint travel to the pre-grasp, more for a leaning top
+/// grasp), the pre-grasp's joints, the grasp, and the straight descent into it.
+pub(super) struct ApproachOption {
+    pub(super) cost: f64,
+    pub(super) pre: Joints,
+    pub(super) grasp: Grasp,
+    pub(super) descent: Vec<Joints>,
+}
+
+impl PlannedExpert {
+    /// A free path to a pre-grasp, the grasp, and the straight descent into it: of the
+    /// candidates the arm reaches clear of the arena and the object, the one with the least
+    /// joint travel. Side grasps pointing towards bin 2 are tried first (the carry and the
+    /// push start well from them); only where none has a path, every other heading; for the
+    /// dumbbell, last, every heading pitched steeper (behind the door the hand must come down
+    /// from above the posts). For a push, grasps from which its lines keep clear go first in
+    /// each of these ([`Self::clear_slides_first`]); for the plate and the dumbbell, where no
+    /// first-choice heading gives such lines, the first two are weighed together.
+    pub(super) fn plan_approach(
+        &mut self,
+        env: &Env,
+        q: Joints,
+        object: Point3<f64>,
+        rotation: UnitQuaternion<f64>,
+    ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
+        let around = self.clearance.with_object(
+            self.task.object,
+            &Isometry3::from_parts(object.coords.into(), rotation),
+        );
+        let side = matches!(self.task.object, Object::Plate | Object::Dumbbell);
+        let mut first =
+            self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
+        if self.pushing() {
+            let any_clear;
+            (first, any_clear) = self.clear_slides_first(env, first);
+            if side && !any_clear {
+                // A push whose lines would drag the arm along the arena from every
+                // first-choice grasp: the other headings too, those with clear lines first.
+                first.extend(self.approach_options(
+                    env,
+                    q,
+                    object,
+                    rotation,
+                    &around,
+                    Headings::Around,
+                ));
+                first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+                first = self.clear_slides_first(env, first).0;
+            }
+        }
+        if let Some(found) = self.plan_first(env, &around, q, first) {
+            return Some(found);
+        }
+        if !side {
+            return None;
+        }
+        let others = self.pushes_clear_first(
+            env,
+            self.approach_options(env, q, object, rotation, &around, Headings::Around),
+        );
+        if let Some(found) = self.plan_first(env, &around, q, others) {
+            return Some(found);
+        }
+        if self.task.object != Object::Dumbbell {
+            return None;
+        }
+        let steep = self.pushes_clear_first(
+            env,
+            self.approach_options(env, q, object, rotation, &around, Headings::AroundSteep),
+        );
+        self.plan_first(env, &around, q, steep)
+    }
+
+    /// The ways into a grasp of the object at `object` (side grasps pointing along
+    /// `headings`) whose pre-grasp and descent keep clear, cheapest first.
+    fn approach_options(
+        &self,
+        env: &Env,
+        q: Joints,
+        object: Point3<f64>,
+        rotation: UnitQuaternion<f64>,
+        around: &Clearance,
+        headings: Headings,
+    ) -> Vec<ApproachOption> {
+        let model = env.world().model;
+        // Top grasps also leaning towards the robot: over a wall near it, a vertical gripper
+        // hangs the Panda's forearm on the wall.
+        let candidates = GRASP_TILTS.into_iter().flat_map(|tilt| {
+            grasp_candidates(&GraspInput {
+                model,
+                q,
+                object: self.task.object,
+                objective: self.task.objective,
+                obstacle: self.task.obstacle,
+                position: object,
+                rotation,
+                tilt,
+                headings,
+            })
+            .into_iter()
+            .filter(move |g| tilt == 0.0 || g.top_down)
+            .map(move |g| (tilt, g))
+        });
+        let mut options = Vec::new();
+        for (tilt, grasp) in candidates {
+            // The planned approach keeps clear of the object, so the straight stretch into a
+            // top grasp can be short.
+            let grasp = Grasp {
+                pad: if self.task.object == Object::Plate {
+                    grasp.pad + Vector3::z() * PLATE_GRASP_RAISE
+                } else {
+                    grasp.pad
+                },
+                backoff: if grasp.top_down {
+                    grasp.backoff.min(TOP_BACKOFF)
+                } else {
+                    grasp.backoff
+                },
+                ..grasp
+            };
+            let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
+            solutions.truncate(4);
+            for pre in solutions {
+                let (pre, gap) = quicker(model, around, &q, pre, grasp.pre(), grasp.orientation);
+                if gap < LEAST_END_CLEARANCE {
+                    continue;
+                }
+                let Some(descent) = line(model, pre, grasp.pre(), grasp.pad, grasp.orientation)
+                else {
+                    continue;
+                };
+                if descent.iter().any(|c| !off_the_limits(model, c)) {
+                    continue;
+                }
+                // Only the fingers may come close to the floor on the way in.
+                let arm_gap = descent
+                    .iter()
+                    .map(|c| self.clearance.without_fingers(model, c))
+                    .fold(f64::INFINITY, f64::min);
+                if arm_gap < 0.0 {
+                    continue;
+                }
+                // A leaning grasp only where no upright one will do.
+                let cost = joint_distance(&q, &pre) + if tilt > 0.0 { LEANING } else { 0.0 };
+                options.push(ApproachOption {
+                    cost,
+                    pre,
+                    grasp,
+                    descent,
+                });
+            }
+        }
+        options.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        options
+    }
+
+    /// The first of `options` (cheapest first, the first [`PLANNED_OPTIONS`]) with a free
+    /// path from `q` to its pre-grasp.
+    fn plan_first(
+        &mut self,
+        env: &Env,
+        around: &Clearance,
+        q: Joints,
+        options: Vec<ApproachOption>,
+    ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
+        let model = env.world().model;
+        for option in options.into_iter().take(PLANNED_OPTIONS) {
+            if let Some(path) = self.plan_path(env, model, around, q, option.pre) {
+                return Some((path, option.grasp, option.descent));
+            }
+        }
+        None
+    }
+}

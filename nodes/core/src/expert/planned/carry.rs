@@ -1,0 +1,89 @@
+//! The carry of pick-place and the trash can: a planned path, the object held, from just off
+//! the floor to above where it is let go, its bottom clear of the walls it drops over.
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::{LEAST_END_CLEARANCE, PlannedExpert, quicker, top_of};
+use crate::arena::{ROBOT_BASE_POSITION, TRASH_CAN, object_geometry};
+use crate::axes::Objective;
+use crate::env::Env;
+use crate::expert::motion::{pad_ik, pad_ik_solutions, pads_at};
+use crate::expert::track::{Joints, joint_distance};
+
+/// How far (m) the object's bottom is above the walls of what it is dropped into.
+const DROP_CLEARANCE: f64 = 0.03;
+/// Turns (rad) of the gripper about the vertical tried for the carry's end, besides the turn
+/// of the arm's base from the object to the goal.
+const CARRY_TURNS: [f64; 17] = [
+    0.0, -0.3, 0.3, -0.6, 0.6, -0.9, 0.9, -1.2, 1.2, -1.5, 1.5, -1.9, 1.9, -2.4, 2.4, -2.8, 2.8,
+];
+
+impl PlannedExpert {
+    /// The height (m) of the object's bottom where it is let go: just over bin 2's walls or
+    /// the trash can's.
+    fn drop_bottom(&self) -> f64 {
+        let top = match self.task.objective {
+            Objective::TrashCan => top_of(Objective::TrashCan, "trash_can/"),
+            _ => top_of(Objective::PickPlace, "bin2/wall"),
+        };
+        top + DROP_CLEARANCE
+    }
+
+    /// A free path, the object carried, from just off the floor to where it is let go: above
+    /// the goal, its bottom clear of what it drops into. Of the turns of the gripper about the
+    /// vertical, the one moving the joints least.
+    pub(super) fn plan_carry(&mut self, env: &Env, q: Joints) -> Option<Vec<Joints>> {
+        let model = env.world().model;
+        let carrying = self.carrying(env, &q);
+        let (pad, orientation) = pads_at(model, &q);
+        let object_now = pad - self.held;
+        let origin_z = self.drop_bottom() - object_geometry(self.task.object).bottom_offset;
+        let goal = match self.task.objective {
+            Objective::TrashCan => {
+                let [x, y, _] = TRASH_CAN.position;
+                Vector3::new(x, y, origin_z)
+            }
+            _ => {
+                let g = env.goal();
+                Vector3::new(g.x, g.y, origin_z)
+            }
+        };
+        // The base's own turn from the object to the goal turns the gripper with it.
+        let [bx, by, _] = ROBOT_BASE_POSITION;
+        let base_turn =
+            (goal.y - by).atan2(goal.x - bx) - (object_now.y - by).atan2(object_now.x - bx);
+        let mut ends: Vec<(f64, Joints)> = Vec::new();
+        for extra in CARRY_TURNS {
+            let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), base_turn + extra);
+            let (pad_end, orientation_end) = (goal + turn * self.held, turn * orientation);
+            // The quicker variant of `solved`, kept as an end where it keeps clear.
+            let mut keep = |solved: Joints| {
+                let (solved, gap) = quicker(model, &carrying, &q, solved, pad_end, orientation_end);
+                let clear = gap >= LEAST_END_CLEARANCE;
+                if clear {
+                    ends.push((joint_distance(&q, &solved), solved));
+                }
+                clear
+            };
+            let (solved, met) = pad_ik(model, &q, pad_end, orientation_end);
+            if met && keep(solved) {
+                continue;
+            }
+            // The IK from here finds one way of holding that pose: where it meets the arena
+            // (or nothing), look for the others.
+            for solved in pad_ik_solutions(model, &q, pad_end, orientation_end)
+                .into_iter()
+                .take(3)
+            {
+                keep(solved);
+            }
+        }
+        ends.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (_, end) in ends.into_iter().take(3) {
+            if let Some(path) = self.plan_path(env, model, &carrying, q, end) {
+                return Some(path);
+            }
+        }
+        None
+    }
+}

@@ -1,0 +1,160 @@
+//! Shelf: the object carried (a planned path) to in front of the shelf's opening, the gripper
+//! pointing in, then slid straight in; where no slide keeps clear, a path planned all the way
+//! in. Two ways in (heights and depths), tried in turn.
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::lines::line;
+use super::{LEAST_END_CLEARANCE, PlannedExpert, top_of};
+use crate::arena::object_geometry;
+use crate::axes::Objective;
+use crate::env::Env;
+use crate::expert::clearance::Clearance;
+use crate::expert::motion::{pad_ik_solutions, pads_at};
+use crate::expert::track::{Joints, Leg, joint_distance};
+use crate::physics::RobotModel;
+
+/// Where the object's origin waits in front of the shelf (y, m; its front is at 0.14).
+const SHELF_FRONT_Y: f64 = 0.07;
+/// A way into the shelf: the object's origin's height while it goes in, where it is slid to
+/// (y, m), and the lanes (x, m) across the opening (x −0.1…0.3) it may go in along.
+struct ShelfWay {
+    z: f64,
+    inside_y: f64,
+    lanes: &'static [f64],
+}
+
+/// The ways into the shelf, tried in order. First mid-way in the 0.945…1.095 height band, the
+/// gripper's housing clear of the top block (bottom 1.10), slid in to mid-depth of the 0.18…0.33
+/// band (short of the back panel at 0.32). Where no first way keeps clear (the IIWA past the
+/// goal wall: stretched to the shelf, its forearm crosses the wall's end at the wall's top),
+/// higher and only just past the band's front, further out: 3 cm up lifts the forearm over the
+/// wall, 5 cm less deep keeps the wrist's housing out from under the top block.
+const SHELF_WAYS: [ShelfWay; 2] = [
+    ShelfWay {
+        z: 1.0,
+        inside_y: 0.25,
+        lanes: &[0.1, 0.17, 0.03, 0.24],
+    },
+    ShelfWay {
+        z: 1.03,
+        inside_y: 0.20,
+        lanes: &[0.24, 0.28, 0.17],
+    },
+];
+/// Turns (rad) of the gripper about the vertical in front of the shelf, tried with each lane.
+const SHELF_YAWS: [f64; 3] = [0.0, 0.35, -0.35];
+/// How far (rad) the gripper may still point down as it goes into the shelf: each 0.1 rad is
+/// 0.1 rad less for the wrist to turn on the way (~13 control steps); the clearance model
+/// decides how far its housing clears the top block.
+const SHELF_PITCHES: [f64; 4] = [0.6, 0.4, 0.2, 0.0];
+/// How far (m) the object's bottom stays above the board (top 0.945) as it goes in, whatever
+/// the way's height: the upright dumbbell reaches 5.2 cm below its origin.
+const SHELF_BOARD_CLEARANCE: f64 = 0.015;
+
+/// Ways into the shelf along one [`ShelfWay`], each nearest to the arm first (the largest joint
+/// change to it, rad): the starts in front of the shelf with the straight slides in from them
+/// that keep clear, and the poses with the object inside that keep clear (for a planned way in
+/// where no slide does).
+struct ShelfCandidates {
+    slides: Vec<(f64, Joints, Vec<Joints>)>,
+    insides: Vec<(f64, Joints)>,
+}
+
+impl PlannedExpert {
+    /// Shelf: a free path, the object carried, to in front of the shelf's opening with the
+    /// gripper turned to point into the shelf (+y; from a top grasp, which closes along x for
+    /// this, a quarter turn about x), then straight in. Of the lanes across the opening and
+    /// small turns about the vertical, the first the arm reaches clear of the arena, slide
+    /// included; where none does, a path planned all the way in; each of the
+    /// [`SHELF_WAYS`] in turn.
+    pub(super) fn plan_shelf(&mut self, env: &Env, q: Joints) -> Option<Vec<Leg>> {
+        let model = env.world().model;
+        let carrying = self.carrying(env, &q);
+        for way in &SHELF_WAYS {
+            let ShelfCandidates { slides, insides } = self.shelf_options(model, &carrying, q, way);
+            for (_, start, slide) in slides.into_iter().take(3) {
+                if let Some(path) = self.plan_path(env, model, &carrying, q, start) {
+                    return Some(vec![Leg::new(path), Leg::new(slide)]);
+                }
+            }
+            // No straight way in keeps clear (past the goal wall the forearm would cross
+            // it): a path planned all the way in.
+            for (_, inside) in insides.into_iter().take(3) {
+                if let Some(path) = self.plan_path(env, model, &carrying, q, inside) {
+                    return Some(vec![Leg::new(path)]);
+                }
+            }
+        }
+        None
+    }
+
+    /// [`Self::plan_shelf`]'s candidates along `way` for the arm at `q` (the object carried as
+    /// `carrying` says).
+    fn shelf_options(
+        &self,
+        model: &RobotModel,
+        carrying: &Clearance,
+        q: Joints,
+        way: &ShelfWay,
+    ) -> ShelfCandidates {
+        let (_, orientation) = pads_at(model, &q);
+        let insert_z = way.z.max(
+            top_of(Objective::Shelf, "shelf/bottom") + SHELF_BOARD_CLEARANCE
+                - object_geometry(self.task.object).bottom_offset,
+        );
+        let mut options: Vec<(f64, Joints, Vec<Joints>)> = Vec::new();
+        let mut insides: Vec<(f64, Joints)> = Vec::new();
+        for (&lane, yaw, pitch) in way.lanes.iter().flat_map(|lane| {
+            SHELF_YAWS
+                .into_iter()
+                .flat_map(move |yaw| SHELF_PITCHES.map(|pitch| (lane, yaw, pitch)))
+        }) {
+            // The gripper turned the shortest way from where it points now to pointing
+            // into the shelf (+y turned by `yaw`), still `pitch` below level: for a top
+            // grasp a turn about x.
+            let into_shelf = Vector3::new(
+                -yaw.sin() * pitch.cos(),
+                yaw.cos() * pitch.cos(),
+                -pitch.sin(),
+            );
+            let Some(turn) =
+                UnitQuaternion::rotation_between(&(orientation * Vector3::z()), &into_shelf)
+            else {
+                continue;
+            };
+            let front = Vector3::new(lane, SHELF_FRONT_Y, insert_z);
+            let inside = Vector3::new(lane, way.inside_y, insert_z);
+            let (pad_front, pad_inside) = (front + turn * self.held, inside + turn * self.held);
+            // A quarter turn of the wrist is too far for the IK seeded here alone.
+            let mut starts = pad_ik_solutions(model, &q, pad_front, turn * orientation);
+            starts.truncate(3);
+            for start in starts {
+                if !carrying.keeps(model, &start, LEAST_END_CLEARANCE) {
+                    continue;
+                }
+                let Some(slide) = line(model, start, pad_front, pad_inside, turn * orientation)
+                else {
+                    continue;
+                };
+                let end = *slide.last().expect("a point");
+                if carrying.keeps(model, &end, LEAST_END_CLEARANCE) {
+                    insides.push((joint_distance(&q, &end), end));
+                }
+                if slide
+                    .iter()
+                    .any(|c| !carrying.keeps(model, c, LEAST_END_CLEARANCE))
+                {
+                    continue;
+                }
+                options.push((joint_distance(&q, &start), start, slide));
+            }
+        }
+        options.sort_by(|a, b| a.0.total_cmp(&b.0));
+        insides.sort_by(|a, b| a.0.total_cmp(&b.0));
+        ShelfCandidates {
+            slides: options,
+            insides,
+        }
+    }
+}
