@@ -1,7 +1,9 @@
 """`composuite-dataset from-bag`: a recorded session (`composuite launch --record`) whose agent
 acted in the reference's action space (`reference_action_stamped`, from a cyclonedds agent)
 becomes a dataset whose rows are what the agent saw (float32) and which `verify` re-simulates;
-a session driven by `joint_command` is refused, saying why.
+a session driven by `joint_command` is refused, saying why. And the other way round: an `expert`
+file's episode, its stored actions played through the node suite, is what the suite publishes,
+bit for bit.
 
 Only run inside scripts/netns-isolate."""
 
@@ -51,7 +53,7 @@ class ReferenceAgent(LockstepClient):
         want = self.this_episode(self.step_count)
         observation = self.observations.wait_for(want, timeout=5)
         self.answered = ns_of(observation.header.stamp)
-        self.rewards.wait_for(want, timeout=5)
+        self.reward = self.rewards.wait_for(want, timeout=5)
         return observation
 
 
@@ -109,3 +111,35 @@ def test_a_session_driven_by_joint_command_is_refused(tmp_path):
                                            "action space"):
         from_bag(bag, tmp_path / "data")
     assert not (tmp_path / "data").exists()
+
+
+def test_an_expert_episode_plays_through_the_suite_as_its_file_stores_it(tmp_path):
+    """The planned expert's episode of TASK as its `expert` file stores it, played from the
+    stored actions through the node suite (reference_action_stamped, lockstep): every
+    observation and reward the suite publishes is the file's, bit for bit (float32), the suite
+    reports the same successes, and the recorded session becomes the same rows again."""
+    [expert] = datasets.generate(tmp_path / "expert", datasets.select_tasks([TASK]), ["expert"],
+                                 transitions=500, threads=1, command="test")
+    data = datasets.open_task(expert)
+    [(a, b, seed)] = data.episodes()
+    actions = data["actions"][a:b]
+    assert data["successes"][a:b].any(), "the expert solves TASK on this seed"
+
+    def drive(agent):
+        agent.wait_until_recorded("reference_action_stamped")
+        reply = agent.reset(seed=int(seed))
+        rows, rewards, successes = [np.asarray(reply.observation.flat)], [], []
+        for action in actions:
+            rows.append(np.asarray(agent.act(action).flat))
+            rewards.append(agent.reward.total)
+            successes.append(agent.reward.success)
+        return np.array(rows), np.array(rewards), np.array(successes)
+
+    bag, (rows, rewards, successes) = record(tmp_path, "/dsexpert", drive)
+    assert np.array_equal(rows[:-1].astype(np.float32), data["observations"][a:b])
+    assert np.array_equal(rewards.astype(np.float32), data["rewards"][a:b])
+    assert np.array_equal(successes, data["successes"][a:b].astype(bool))
+    (path,) = from_bag(bag, tmp_path / "data", command="test")
+    again = datasets.open_task(path)
+    assert np.array_equal(again["actions"], actions)
+    assert np.array_equal(again["observations"], data["observations"][a:b])
