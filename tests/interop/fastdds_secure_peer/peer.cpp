@@ -515,14 +515,31 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::microseconds(500));
     }
   };
-  auto matched = [&]() {
+  // Each of our endpoints by its topic, and whether it has matched one of the suite's. A
+  // failure names those that have not, so a refusal (or a key exchange that never finished)
+  // points at its topic.
+  auto endpoints = [&]() {
     PublicationMatchedStatus p;
     SubscriptionMatchedStatus s;
-    int n = 0;
-    for (DataWriter* w : {command, request}) n += w->get_publication_matched_status(p) == ReturnCode_t::RETCODE_OK && p.current_count > 0;
+    std::vector<std::pair<std::string, bool>> all;
+    for (DataWriter* w : {command, request})
+      all.emplace_back(w->get_topic()->get_name(),
+                       w->get_publication_matched_status(p) == ReturnCode_t::RETCODE_OK && p.current_count > 0);
     for (DataReader* r : {states, observations, rewards, reply})
-      n += r->get_subscription_matched_status(s) == ReturnCode_t::RETCODE_OK && s.current_count > 0;
+      all.emplace_back(r->get_topicdescription()->get_name(),
+                       r->get_subscription_matched_status(s) == ReturnCode_t::RETCODE_OK && s.current_count > 0);
+    return all;
+  };
+  auto matched = [&]() {
+    int n = 0;
+    for (const auto& [name, is_matched] : endpoints()) n += is_matched;
     return n;
+  };
+  auto unmatched = [&]() {
+    std::string names;
+    for (const auto& [name, is_matched] : endpoints())
+      if (!is_matched) names += " " + name;
+    return names;
   };
 
   if (a.expect_no_suite > 0) {
@@ -535,20 +552,6 @@ int main(int argc, char** argv) {
     std::_Exit(matched() == 0 && obs.empty() && js.empty() ? 0 : 1);
   }
 
-  // Which of ours found no match: named in the failure, so a refusal (or a key exchange that
-  // never finished) points at its topic.
-  auto unmatched = [&]() {
-    PublicationMatchedStatus p;
-    SubscriptionMatchedStatus s;
-    std::string names;
-    for (DataWriter* w : {command, request})
-      if (!(w->get_publication_matched_status(p) == ReturnCode_t::RETCODE_OK && p.current_count > 0))
-        names += " " + w->get_topic()->get_name();
-    for (DataReader* r : {states, observations, rewards, reply})
-      if (!(r->get_subscription_matched_status(s) == ReturnCode_t::RETCODE_OK && s.current_count > 0))
-        names += " " + r->get_topicdescription()->get_name();
-    return names;
-  };
   if (!wait_for(30.0, [&] { return matched() == 6; }))
     fail("the suite's endpoints did not all match within 30 s (" + std::to_string(matched()) +
          " of 6; not matched:" + unmatched() + "): authentication or access control refused?");

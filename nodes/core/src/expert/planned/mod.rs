@@ -36,7 +36,7 @@ use super::plan::{Space, path_length, plan};
 use super::track::{Joints, Leg, Tracker, joint_distance};
 use super::{EpisodeOutcome, run_with};
 use crate::TaskSpec;
-use crate::arena::{Primitive, arena_parts, object_geometry};
+use crate::arena::{Primitive, arena_parts};
 use crate::axes::{Objective, Obstacle};
 use crate::env::{Action, Env};
 use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model};
@@ -220,7 +220,6 @@ impl PlannedExpert {
         let pose = object_pose(env);
         let object = Point3::from(pose.translation.vector);
         let rotation = pose.rotation;
-        let bottom = object_geometry(self.task.object).bottom_offset;
         match self.stage {
             Stage::Start => {
                 if self.attempts >= MAX_ATTEMPTS {
@@ -307,7 +306,7 @@ impl PlannedExpert {
                 }
             }
             Stage::Carry if self.task.objective == Objective::PickPlace => {
-                self.lower_into_bin2(model, q, object, bottom);
+                self.lower_into_bin2(model, q, object);
                 self.stage = Stage::Lower;
             }
             Stage::Carry | Stage::Lower => {

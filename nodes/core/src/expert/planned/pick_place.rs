@@ -5,6 +5,7 @@ use nalgebra::{Point3, Vector3};
 
 use super::lines::line;
 use super::{PlannedExpert, top_of};
+use crate::arena::object_geometry;
 use crate::axes::Objective;
 use crate::expert::motion::pads_at;
 use crate::expert::track::{Joints, Leg};
@@ -15,17 +16,12 @@ use crate::physics::RobotModel;
 const IN_BIN_Z: f64 = 0.87;
 
 impl PlannedExpert {
-    /// Down into bin 2 from above it, the object (origin at `object`, its bottom `bottom`
-    /// below that) still held: to [`IN_BIN_Z`], no lower than 1 cm above the bin's floor.
-    pub(super) fn lower_into_bin2(
-        &mut self,
-        model: &RobotModel,
-        q: Joints,
-        object: Point3<f64>,
-        bottom: f64,
-    ) {
+    /// Down into bin 2 from above it, the object (origin at `object`) still held: to
+    /// [`IN_BIN_Z`], no lower than 1 cm above the bin's floor.
+    pub(super) fn lower_into_bin2(&mut self, model: &RobotModel, q: Joints, object: Point3<f64>) {
         // Success needs the object below bin 2's wall tops with the gripper near it:
         // lowered there, not dropped.
+        let bottom = object_geometry(self.task.object).bottom_offset;
         let (pad, orientation) = pads_at(model, &q);
         let floor = top_of(Objective::PickPlace, "bin2/floor");
         let floor_gap = object.z + bottom - (floor + 0.01);
