@@ -422,12 +422,15 @@ def test_reset_simulation_starts_the_next_episode(client):
     expect(client.call("reset_simulation", scope=ResetSimulation.Request.SCOPE_TIME).result,
            Result.RESULT_FEATURE_UNSUPPORTED, "SCOPE_STATE")
     expect(client.call("reset_simulation", once=True).result, Result.RESULT_OK)  # SCOPE_DEFAULT
-    # Answered after the new episode's first observation: the seed counted up from the reset's.
-    episode = max(e for e, _ in client.observations)
-    assert episode == first.episode + 1
+    # The suite answers after publishing the new episode's first observation, but the reply and
+    # the observation are different DDS topics: the observation may reach us after the reply
+    # (a lost sample is resent on the next heartbeat). Wait for it, then check nothing else came.
+    episode = first.episode + 1
     client.wait_step(episode, 0, reward=False)
+    assert max(e for e, _ in client.observations) == episode
     expect(client.call("reset_simulation", once=True,
                        scope=ResetSimulation.Request.SCOPE_ALL).result, Result.RESULT_OK)
+    client.wait_step(episode + 1, 0, reward=False)
     assert max(e for e, _ in client.observations) == episode + 1
     # The same start as reset with that seed: seed 31 came next.
     again = client.reset(31)
