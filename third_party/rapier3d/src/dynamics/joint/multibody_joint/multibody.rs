@@ -6,7 +6,8 @@ use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
 use crate::dynamics::solver::{GenericJointConstraint, WritebackId};
 use crate::dynamics::{
-    IntegrationParameters, RigidBodyHandle, RigidBodySet, RigidBodyType, RigidBodyVelocity,
+    IntegrationParameters, JointAxesMask, RigidBodyHandle, RigidBodySet, RigidBodyType,
+    RigidBodyVelocity,
 };
 use crate::math::{
     ANG_DIM, AngVector, AngularInertia, DIM, DVector, Jacobian, Pose, Real, SPATIAL_DIM, Vector,
@@ -117,6 +118,21 @@ fn gemm3<RY: na::Dim, RB: na::Dim, SY, SB>(
         v = s1 * f32x4::splat(b1) + v;
         s2 * f32x4::splat(b2) + v
     });
+}
+
+/// CompoSuite-ROS patch: the axes a joint leaves free (its DoFs, in order), one turn per DoF
+/// instead of one per spatial axis (the loops over a joint's DoFs run three times a step).
+#[inline]
+fn free_axes(locked: JointAxesMask) -> impl Iterator<Item = usize> {
+    let mut free = !locked.bits() & ((1 << SPATIAL_DIM) - 1);
+    core::iter::from_fn(move || {
+        if free == 0 {
+            return None;
+        }
+        let axis = free.trailing_zeros() as usize;
+        free &= free - 1;
+        Some(axis)
+    })
 }
 
 /// CompoSuite-ROS patch: column `dof` of a body Jacobian as a twist: the velocity of the body's
@@ -631,8 +647,8 @@ impl Multibody {
         self.update_acceleration(dt, bodies);
     }
 
-    /// Reads the mass matrix, `link_inertias` and the link centres the mass matrix update left:
-    /// only `update_dynamics` calls it.
+    /// Reads the mass matrix, `link_inertias` and the link centres, shifts and DoF twists the mass
+    /// matrix update left: only `update_dynamics` calls it.
     ///
     /// CompoSuite-ROS patch: the Coriolis, centrifugal and gyroscopic forces are explicit, the
     /// damping and spring forces implicit (their `dt` terms are on the mass matrix's diagonal):
@@ -697,28 +713,24 @@ impl Multibody {
         }
 
         // Inwards: each subtree's wrench on its link's own DoFs, then onto its parent.
+        let workspace = &mut self.workspace;
         for i in (0..self.links.len()).rev() {
             let link = &self.links[i];
-            let jacobian = &self.body_jacobians[i];
-            let wrench = self.workspace.wrenches[i];
-            let user = self.workspace.user_wrenches[i];
+            let wrench = workspace.wrenches[i];
+            let user = workspace.user_wrenches[i];
             for dof in link.assembly_id..link.assembly_id + link.joint.ndofs() {
-                let (v, w) = twist(jacobian, dof);
+                let (v, w) = workspace.twists[dof];
                 self.accelerations[dof] = wrench.power(v, w);
                 if controlled {
-                    self.workspace.user_forces[dof] = user.power(v, w);
+                    workspace.user_forces[dof] = user.power(v, w);
                 }
             }
             if i != 0 {
                 let parent = link.parent_internal_id;
-                let d = self.workspace.centers[i] - self.workspace.centers[parent];
-                let (wrenches, users) = (
-                    &mut self.workspace.wrenches,
-                    &mut self.workspace.user_wrenches,
-                );
-                wrenches[parent].add_shifted(&wrench, d);
+                let d = workspace.shifts[i];
+                workspace.wrenches[parent].add_shifted(&wrench, d);
                 if controlled {
-                    users[parent].add_shifted(&user, d);
+                    workspace.user_wrenches[parent].add_shifted(&user, d);
                 }
             }
         }
@@ -733,19 +745,15 @@ impl Multibody {
         // Implicit joint springs: backward-Euler at `q⁺ = q + dt·v⁺` gives `-k·(q − rest) − k·dt·v⁺`,
         // with the `v⁺` part implicit via the `dt²·k` mass-matrix diagonal (see `update_mass_matrix`).
         // Consistency requires BOTH `-k·(q − rest)` and `-k·dt·v` here, else the spring is only semi-implicit.
-        for li in 0..self.links.len() {
-            let mut idx = self.links[li].assembly_id;
-            let locked = self.links[li].joint.data.locked_axes.bits();
-            for a in 0..SPATIAL_DIM {
-                if (locked >> a) & 1 == 0 {
-                    let k = self.links[li].joint.spring_stiffness[a];
-                    if k != 0.0 {
-                        let q = self.links[li].joint.coords[a];
-                        let rest = self.links[li].joint.spring_ref[a];
-                        let spring_pos_force = -k * (q - rest);
-                        self.accelerations[idx] += spring_pos_force - k * dt * self.velocities[idx];
-                    }
-                    idx += 1;
+        for link in self.links.iter() {
+            let joint = &link.joint;
+            for (idx, a) in (link.assembly_id..).zip(free_axes(joint.data.locked_axes)) {
+                let k = joint.spring_stiffness[a];
+                if k != 0.0 {
+                    let q = joint.coords[a];
+                    let rest = joint.spring_ref[a];
+                    let spring_pos_force = -k * (q - rest);
+                    self.accelerations[idx] += spring_pos_force - k * dt * self.velocities[idx];
                 }
             }
         }
@@ -781,13 +789,8 @@ impl Multibody {
         // The generalized coordinates, as the springs read them.
         let positions = &mut self.workspace.positions;
         for link in self.links.iter() {
-            let mut idx = link.assembly_id;
-            let locked = link.joint.data.locked_axes.bits();
-            for a in 0..SPATIAL_DIM {
-                if (locked >> a) & 1 == 0 {
-                    positions[idx] = link.joint.coords[a];
-                    idx += 1;
-                }
+            for (idx, a) in (link.assembly_id..).zip(free_axes(link.joint.data.locked_axes)) {
+                positions[idx] = link.joint.coords[a];
             }
         }
         let desired = &mut self.workspace.desired;
@@ -981,14 +984,24 @@ impl Multibody {
             self.workspace.centers[i] = rb.mprops.world_com;
             self.workspace.composites[i] =
                 Composite::body(mass.x, self.link_inertias[i].into_matrix());
+            for k in link.assembly_id..link.assembly_id + link.joint.ndofs() {
+                self.workspace.twists[k] = twist(&self.body_jacobians[i], k);
+            }
+        }
+        for i in 1..self.links.len() {
+            let parent = self.links[i].parent_internal_id;
+            self.workspace.shifts[i] = self.workspace.centers[i] - self.workspace.centers[parent];
         }
 
+        // Column-major: entry (r, c) is `mass[c * n + r]`.
+        let mass = self.mass_matrix.as_mut_slice();
+        let workspace = &mut self.workspace;
         for i in (0..self.links.len()).rev() {
-            let composite = self.workspace.composites[i];
+            let composite = workspace.composites[i];
             let link = &self.links[i];
             let own = link.assembly_id..link.assembly_id + link.joint.ndofs();
             for k in own.clone() {
-                let (v, w) = twist(&self.body_jacobians[i], k);
+                let (v, w) = workspace.twists[k];
                 let (linear, angular) = composite.momentum(v, w);
                 let mut momentum = Wrench {
                     force: linear,
@@ -996,29 +1009,26 @@ impl Multibody {
                 };
                 // With the link's own DoFs (both triangles: k meets each of them once).
                 for l in own.clone() {
-                    let (vl, wl) = twist(&self.body_jacobians[i], l);
-                    self.mass_matrix[(l, k)] = momentum.power(vl, wl);
+                    let (vl, wl) = workspace.twists[l];
+                    mass[k * n + l] = momentum.power(vl, wl);
                 }
                 // With each ancestor's DoFs, the momentum carried to its centre.
                 let mut j = i;
                 while j != 0 {
-                    let parent = self.links[j].parent_internal_id;
-                    let d = self.workspace.centers[j] - self.workspace.centers[parent];
-                    momentum.torque += d.cross(momentum.force);
-                    j = parent;
+                    momentum.torque += workspace.shifts[j].cross(momentum.force);
+                    j = self.links[j].parent_internal_id;
                     let ancestor = &self.links[j];
                     for l in ancestor.assembly_id..ancestor.assembly_id + ancestor.joint.ndofs() {
-                        let (vl, wl) = twist(&self.body_jacobians[j], l);
+                        let (vl, wl) = workspace.twists[l];
                         let entry = momentum.power(vl, wl);
-                        self.mass_matrix[(l, k)] = entry;
-                        self.mass_matrix[(k, l)] = entry;
+                        mass[k * n + l] = entry;
+                        mass[l * n + k] = entry;
                     }
                 }
             }
             if i != 0 {
-                let parent = link.parent_internal_id;
-                let d = self.workspace.centers[i] - self.workspace.centers[parent];
-                self.workspace.composites[parent].add_shifted(&composite, d);
+                let d = workspace.shifts[i];
+                workspace.composites[link.parent_internal_id].add_shifted(&composite, d);
             }
         }
 
@@ -1042,16 +1052,12 @@ impl Multibody {
         // keeps a stiff spring on a low-inertia link stable where an explicit position motor injects energy.
         // The spring lives on the link's `MultibodyJoint` so it travels with the link through topology changes.
         let dt2 = dt * dt;
-        for li in 0..self.links.len() {
-            let mut idx = self.links[li].assembly_id;
-            let locked = self.links[li].joint.data.locked_axes.bits();
-            for a in 0..SPATIAL_DIM {
-                if (locked >> a) & 1 == 0 {
-                    let k = self.links[li].joint.spring_stiffness[a];
-                    if k != 0.0 {
-                        self.augmented_mass[(idx, idx)] += k * dt2;
-                    }
-                    idx += 1;
+        for link in self.links.iter() {
+            let joint = &link.joint;
+            for (idx, a) in (link.assembly_id..).zip(free_axes(joint.data.locked_axes)) {
+                let k = joint.spring_stiffness[a];
+                if k != 0.0 {
+                    self.augmented_mass[(idx, idx)] += k * dt2;
                 }
             }
         }

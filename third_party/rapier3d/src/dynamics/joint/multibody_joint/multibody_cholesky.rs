@@ -42,6 +42,10 @@ impl Default for MultibodyCholesky {
 /// gripper is 9), larger ones in a heap copy.
 const STACK_DIM: usize = 32;
 
+/// The size the factorisation and the solves are specialised for: a 7-DoF arm and the two
+/// fingers of its gripper.
+const ARM_DIM: usize = 9;
+
 /// The smallest pivot the factorisation accepts, relative to the matrix's largest diagonal
 /// entry: a DoF with no inertia at all (a massless link without armature) would otherwise
 /// divide by zero; it gets this much instead (MuJoCo clamps its pivots the same way).
@@ -62,18 +66,33 @@ impl MultibodyCholesky {
             self.inverse = DMatrix::zeros(dim, dim);
             self.l_inv = DMatrix::zeros(dim, dim);
         }
-        let largest = (0..dim).fold(0.0, |acc: Real, i| acc.max(m[(i, i)].abs()));
+        // An arm with a two-finger gripper has 9 DoFs: with the size a constant the loops below
+        // unroll and lose their bounds checks. The same operations in the same order either way.
+        if dim == ARM_DIM {
+            self.factorise_sized(m, ARM_DIM);
+            self.form_inverse_sized(ARM_DIM);
+        } else {
+            self.factorise_sized(m, dim);
+            self.form_inverse_sized(dim);
+        }
+    }
+
+    /// [`Self::factorise`]'s work for `n = dim`, inlined into each of its calls so that a
+    /// constant `n` specialises it.
+    #[inline(always)]
+    fn factorise_sized(&mut self, m: &DMatrix<Real>, n: usize) {
+        let m_rows = m.nrows();
+        let m = &m.as_slice()[..m_rows * n];
+        let largest = (0..n).fold(0.0, |acc: Real, i| acc.max(m[i * m_rows + i].abs()));
         let min_pivot = (largest * MIN_RELATIVE_PIVOT).max(Real::MIN_POSITIVE);
-        let n = dim;
         // Column-major: entry (r, c) is `l[c * n + r]`; column j is one slice.
-        let l = self.l.as_mut_slice();
+        let l = &mut self.l.as_mut_slice()[..n * n];
+        let inv_diagonal = &mut self.inv_diagonal[..n];
         for j in 0..n {
             // Columns before j, and column j from its diagonal down.
             let (before, rest) = l.split_at_mut(j * n);
             let column = &mut rest[j..n];
-            for (r, entry) in column.iter_mut().enumerate() {
-                *entry = m[(j + r, j)];
-            }
+            column.copy_from_slice(&m[j * m_rows + j..j * m_rows + n]);
             // Subtract the columns before j: L[r, j] -= L[r, k]·L[j, k].
             for k in 0..j {
                 let earlier = &before[k * n + j..(k + 1) * n];
@@ -88,29 +107,29 @@ impl MultibodyCholesky {
             let pivot = column[0].max(min_pivot);
             let diagonal = pivot.sqrt();
             let inv = 1.0 / diagonal;
-            self.inv_diagonal[j] = inv;
+            inv_diagonal[j] = inv;
             column[0] = diagonal;
             for entry in &mut column[1..] {
                 *entry *= inv;
             }
         }
-        self.form_inverse();
     }
 
     /// `M⁻¹` from the factor: each column of `L⁻¹` by a forward substitution of a unit vector
     /// (updates along `L`'s contiguous columns), then `M⁻¹ = L⁻ᵀ·L⁻¹`, whose entry (i, j),
     /// i ≤ j, is the dot product of `L⁻¹`'s columns i and j over rows j.. (each entry once,
-    /// mirrored).
-    fn form_inverse(&mut self) {
-        let n = self.dim();
-        let l = self.l.as_slice();
-        let l_inv = self.l_inv.as_mut_slice();
+    /// mirrored). Inlined like [`Self::factorise_sized`].
+    #[inline(always)]
+    fn form_inverse_sized(&mut self, n: usize) {
+        let l = &self.l.as_slice()[..n * n];
+        let inv_diagonal = &self.inv_diagonal[..n];
+        let l_inv = &mut self.l_inv.as_mut_slice()[..n * n];
         for c in 0..n {
             let x = &mut l_inv[c * n..(c + 1) * n];
             x.fill(0.0);
             x[c] = 1.0;
             for k in c..n {
-                let xk = x[k] * self.inv_diagonal[k];
+                let xk = x[k] * inv_diagonal[k];
                 x[k] = xk;
                 let (_, below) = x.split_at_mut(k + 1);
                 for (xr, lrk) in below.iter_mut().zip(&l[k * n + k + 1..(k + 1) * n]) {
@@ -118,7 +137,7 @@ impl MultibodyCholesky {
                 }
             }
         }
-        let inverse = self.inverse.as_mut_slice();
+        let inverse = &mut self.inverse.as_mut_slice()[..n * n];
         for i in 0..n {
             let column_i = &l_inv[i * n..(i + 1) * n];
             for j in i..n {
@@ -166,6 +185,18 @@ impl MultibodyCholesky {
     pub fn solve_slice_mut(&self, b: &mut [Real]) {
         let n = self.dim();
         assert_eq!(n, b.len(), "Cholesky solve dimension mismatch.");
+        // Specialised for the common size, as in `factorise`.
+        if n == ARM_DIM {
+            self.solve_sized(b, ARM_DIM);
+        } else {
+            self.solve_sized(b, n);
+        }
+    }
+
+    /// [`Self::solve_slice_mut`]'s work for `n = b.len()`, inlined into each of its calls.
+    #[inline(always)]
+    fn solve_sized(&self, b: &mut [Real], n: usize) {
+        let b = &mut b[..n];
         let mut stack = [0.0; STACK_DIM];
         let mut heap = Vec::new();
         let rhs = if n <= STACK_DIM {
@@ -177,7 +208,7 @@ impl MultibodyCholesky {
         rhs.copy_from_slice(b);
         b.fill(0.0);
         // Column by column of the (column-major) inverse: x += M⁻¹[:, c]·b[c].
-        let inverse = self.inverse.as_slice();
+        let inverse = &self.inverse.as_slice()[..n * n];
         for (c, bc) in rhs.iter().enumerate() {
             if *bc != 0.0 {
                 for (xr, mrc) in b.iter_mut().zip(&inverse[c * n..(c + 1) * n]) {
@@ -254,6 +285,32 @@ mod tests {
                 assert_eq!(bits(&slice), bits(&view), "n {n}, {zeros} zeros");
             }
         }
+    }
+
+    #[test]
+    fn the_arm_sized_path_equals_the_general_one_bit_for_bit() {
+        // `black_box` hides the size from the optimiser: the general loops, against the ones
+        // specialised for ARM_DIM that `factorise` and `solve_slice_mut` take.
+        let n = ARM_DIM;
+        let m = spd(n, 11);
+        let mut specialised = MultibodyCholesky::default();
+        specialised.factorise(&m, n);
+        let mut general = MultibodyCholesky::default();
+        general.factorise(&m, n);
+        general.factorise_sized(&m, core::hint::black_box(n));
+        general.form_inverse_sized(core::hint::black_box(n));
+        let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(specialised.l.as_slice()), bits(general.l.as_slice()));
+        assert_eq!(
+            bits(specialised.inverse.as_slice()),
+            bits(general.inverse.as_slice())
+        );
+        let b: Vec<Real> = (0..n).map(|i| (i as Real * 0.61).cos()).collect();
+        let mut x = b.clone();
+        specialised.solve_slice_mut(&mut x);
+        let mut y = b.clone();
+        general.solve_sized(&mut y, core::hint::black_box(n));
+        assert_eq!(bits(&x), bits(&y));
     }
 
     #[test]

@@ -15,6 +15,14 @@ pub(crate) struct MultibodyWorkspace {
     /// CompoSuite-ROS patch: per link, the world centre of mass its quantities are taken about.
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
     pub centers: Vec<Vector>,
+    /// CompoSuite-ROS patch: per link, its centre less its parent's (the lever both passes
+    /// carry momenta and wrenches across; the root's is unused).
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    pub shifts: Vec<Vector>,
+    /// CompoSuite-ROS patch: per DoF, its column of its own link's Jacobian as a twist (the
+    /// velocity of the link's centre and its angular velocity for a unit rate), read once.
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    pub twists: Vec<(Vector, Vector)>,
     /// CompoSuite-ROS patch: per link, the wrench of its subtree (the Newton–Euler pass), all
     /// forces, and the user's alone.
     #[cfg_attr(feature = "serde-serialize", serde(skip))]
@@ -36,6 +44,8 @@ impl MultibodyWorkspace {
             ndofs_vec: DVector::zeros(0),
             composites: Vec::new(),
             centers: Vec::new(),
+            shifts: Vec::new(),
+            twists: Vec::new(),
             wrenches: Vec::new(),
             user_wrenches: Vec::new(),
             user_forces: DVector::zeros(0),
@@ -50,6 +60,8 @@ impl MultibodyWorkspace {
         self.ndofs_vec = DVector::zeros(ndofs);
         self.composites.resize(nlinks, Composite::default());
         self.centers.resize(nlinks, Vector::ZERO);
+        self.shifts.resize(nlinks, Vector::ZERO);
+        self.twists.resize(ndofs, (Vector::ZERO, Vector::ZERO));
         self.wrenches.resize(nlinks, Wrench::default());
         self.user_wrenches.resize(nlinks, Wrench::default());
         self.user_forces = DVector::zeros(ndofs);
