@@ -424,9 +424,26 @@ pub mod serde {
 /// operations), so the result is the same bit for bit, in fewer instructions.
 #[inline(always)]
 pub(crate) fn dot_as_nalgebra(a: &[Real], b: &[Real]) -> Real {
-    use wide::f32x4;
     debug_assert_eq!(a.len(), b.len(), "dot_as_nalgebra: lengths");
     let n = a.len().min(b.len());
+    // Specialised for an arm's DoFs, as `axpy_as_nalgebra` is.
+    if n == ARM_DOFS {
+        dot_sized(a, b, ARM_DOFS)
+    } else {
+        dot_sized(a, b, n)
+    }
+}
+
+/// CompoSuite-ROS patch: the number of DoFs of a 7-DoF arm with a two-finger gripper, the size
+/// the multibody's hottest loops (its factorisation, and each row's dot product and update in
+/// every solver pass) are specialised for: with the size a constant they unroll and lose their
+/// bounds checks. The operations and their order are the same at any size.
+pub(crate) const ARM_DOFS: usize = 9;
+
+/// [`dot_as_nalgebra`] over the first `n` entries, inlined so that a constant `n` specialises it.
+#[inline(always)]
+fn dot_sized(a: &[Real], b: &[Real], n: usize) -> Real {
+    use wide::f32x4;
     let (a, b) = (&a[..n], &b[..n]);
     let (mut low, mut high) = (f32x4::ZERO, f32x4::ZERO);
     let mut i = 0;
@@ -464,9 +481,21 @@ pub(crate) fn unit_dot_as_nalgebra(v_k: Real) -> Real {
 /// the same bit for bit.
 #[inline(always)]
 pub(crate) fn axpy_as_nalgebra(y: &mut [Real], alpha: Real, x: &[Real]) {
-    use wide::f32x4;
     debug_assert_eq!(y.len(), x.len(), "axpy_as_nalgebra: lengths");
     let n = y.len().min(x.len());
+    // A 9-DoF arm's rows, ~115 a step, take the unrolled copy (see `ARM_DOFS`).
+    if n == ARM_DOFS {
+        axpy_sized(y, alpha, x, ARM_DOFS);
+    } else {
+        axpy_sized(y, alpha, x, n);
+    }
+}
+
+/// [`axpy_as_nalgebra`] over the first `n` entries, inlined so that a constant `n` specialises
+/// it.
+#[inline(always)]
+fn axpy_sized(y: &mut [Real], alpha: Real, x: &[Real], n: usize) {
+    use wide::f32x4;
     let (y, x) = (&mut y[..n], &x[..n]);
     let scale = f32x4::splat(alpha);
     let mut i = 0;

@@ -44,7 +44,7 @@ const STACK_DIM: usize = 32;
 
 /// The size the factorisation and the solves are specialised for: a 7-DoF arm and the two
 /// fingers of its gripper.
-const ARM_DIM: usize = 9;
+const ARM_DIM: usize = crate::utils::ARM_DOFS;
 
 /// The smallest pivot the factorisation accepts, relative to the matrix's largest diagonal
 /// entry: a DoF with no inertia at all (a massless link without armature) would otherwise
