@@ -87,9 +87,12 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         let mut env = Env::new(task, config);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
         let mut action = || Action::Reference(std::array::from_fn(|_| rng.random_range(-1.0..1.0)));
-        // Warm-up: one short episode.
+        // Warm-up: one short episode (shorter when the horizon is).
         env.reset(0).map_err(|e| e.to_string())?;
         for _ in 0..20 {
+            if env.ended().is_some() {
+                break;
+            }
             env.step(&action()).map_err(|e| e.to_string())?;
         }
         let mut resets = Vec::new();

@@ -331,6 +331,23 @@ fn bench_reports_each_task_as_json() {
 }
 
 #[test]
+fn bench_runs_with_a_horizon_shorter_than_its_warm_up() {
+    // The warm-up episode (20 steps) ends at a 5-step horizon instead of stepping past it.
+    let rows = json_of(&[
+        "bench",
+        "--tasks",
+        "IIWA/box/no_obstacle/pick_place",
+        "--steps",
+        "12",
+        "--horizon",
+        "5",
+        "--json",
+    ]);
+    assert_eq!(rows.as_array().unwrap().len(), 1);
+    assert!(rows[0]["steps_per_s"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
 fn bench_names_a_bad_task() {
     let out = composuite(&["bench", "--tasks", "IIWA/box/wall/push"]);
     assert_eq!(out.status.code(), Some(2));
