@@ -313,6 +313,7 @@ mod tests {
         assert_eq!(values[0].1, ParameterValue::String("realtime".into()));
         assert_eq!(values[1].1, ParameterValue::Double(10.5));
         assert!(unknown.is_empty());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

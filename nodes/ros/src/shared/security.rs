@@ -325,6 +325,7 @@ mod tests {
         );
         let err = decide(&switches(true, true, None), None).unwrap_err();
         assert!(err.contains("ROS_SECURITY_KEYSTORE is unset"), "{err}");
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]
@@ -346,5 +347,6 @@ mod tests {
         s.enclave_override = None;
         let err = decide(&s, None).unwrap_err();
         assert!(err.contains("missing identity_ca.cert.pem"), "{err}");
+        std::fs::remove_dir_all(&root).unwrap();
     }
 }
