@@ -1629,7 +1629,12 @@ impl SecureDiscovery {
         );
       }
       Some(DiscHandshakeState::PendingFinalMessage) => {
-        self.handshake_on_pending_final_message(message, discovery_db, discovery_updated_sender);
+        self.handshake_on_pending_final_message(
+          message,
+          discovery_db,
+          discovery_updated_sender,
+          auth_msg_writer,
+        );
       }
       Some(DiscHandshakeState::CompletedWithFinalMessageSent) => {
         // Handshake with this remote has completed by us sending the final
@@ -1843,12 +1848,41 @@ impl SecureDiscovery {
     received_message: &ParticipantStatelessMessage,
     discovery_db: &Arc<RwLock<DiscoveryDB>>,
     discovery_updated_sender: &WakeSender<DiscoveryNotificationType>,
+    auth_msg_writer: &no_key::DataWriter<ParticipantStatelessMessage>,
   ) {
     let remote_guid_prefix = received_message.generic.source_guid_prefix();
     debug!(
       "Received a handshake message from remote participant {remote_guid_prefix:?}. Expecting a \
        final handshake message"
     );
+
+    // CompoSuite-ROS patch: a request (it relates to no earlier message) while our reply waits
+    // for its final message. The request we answered, again: our reply may not have arrived, so
+    // it is sent again. A new request: the initiator gave the one we answered up (Fast DDS
+    // sends a new request once a second until it takes a reply), so it is answered anew and our
+    // pending reply forgotten. Ignoring it, as 0.15.1 did, left both sides waiting for good.
+    if received_message.generic.related_message_identity.writer_guid == GUID::GUID_UNKNOWN {
+      let answered = self
+        .stored_authentication_messages
+        .get(&remote_guid_prefix)
+        .map(|stored| stored.message.generic.related_message_identity);
+      if answered == Some(received_message.generic.message_identity) {
+        debug!("The request we answered came again from {remote_guid_prefix:?}: replying again");
+        self.reset_stored_message_resend_counter(&remote_guid_prefix);
+        if let Some(stored) = self.stored_authentication_messages.get(&remote_guid_prefix) {
+          let _ = auth_msg_writer
+            .write(stored.message.clone(), None)
+            .map_err(|err| debug!("Failed to send the handshake reply again: {err}"));
+        }
+      } else {
+        info!(
+          "A new handshake request from {remote_guid_prefix:?} while our reply to an earlier one \
+           waited for its final message: answering the new one"
+        );
+        self.handshake_on_pending_request_message(received_message, discovery_db, auth_msg_writer);
+      }
+      return;
+    }
 
     // Make sure that 'related message identity' in the received message matches
     // the message that we have sent to the remote

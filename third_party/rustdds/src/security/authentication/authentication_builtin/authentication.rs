@@ -514,9 +514,15 @@ impl Authentication for AuthenticationBuiltin {
     let my_id_certificate_text = Bytes::from(local_info.identity_certificate.to_pem());
     let my_permissions_doc_text = local_info.signed_permissions_document_xml.clone();
 
-    // Make sure we are expecting a authentication request from remote
+    // Make sure we are expecting a authentication request from remote.
+    // (CompoSuite-ROS patch: also while our reply to an earlier request waits for its final
+    // message. The initiator may have given that request up and sent a new one; the new one
+    // replaces it, as a new handshake. Refusing it left both sides waiting for each other for
+    // good: the initiator for a reply to its current request, we for a final message.)
     let remote_info = self.get_remote_participant_info(&initiator_identity_handle)?;
-    if let BuiltinHandshakeState::PendingRequestMessage = remote_info.handshake.state {
+    if let BuiltinHandshakeState::PendingRequestMessage
+    | BuiltinHandshakeState::PendingFinalMessage { .. } = remote_info.handshake.state
+    {
       // Nothing to see here. Carry on.
     } else {
       return Err(create_security_error_and_log!(
