@@ -1641,7 +1641,7 @@ impl SecureDiscovery {
         // message. Send the message again in case the remote hasn't
         // received it
         debug!("Resending a final handshake message to remote participant {remote_guid_prefix:?}");
-        self.resend_final_handshake_message(remote_guid_prefix, auth_msg_writer);
+        self.resend_stored_handshake_message(remote_guid_prefix, auth_msg_writer);
       }
       Some(DiscHandshakeState::CompletedWithFinalMessageReceived) => {
         debug!(
@@ -1858,9 +1858,10 @@ impl SecureDiscovery {
 
     // CompoSuite-ROS patch: a request (it relates to no earlier message) while our reply waits
     // for its final message. The request we answered, again: our reply may not have arrived, so
-    // it is sent again. A new request: the initiator gave the one we answered up (Fast DDS
-    // sends a new request once a second until it takes a reply), so it is answered anew and our
-    // pending reply forgotten. Ignoring it, as 0.15.1 did, left both sides waiting for good.
+    // it is sent again. A new request: the initiator has given the one we answered up (a Fast
+    // DDS agent was seen asking once a second for 30 s while our reply, sent ten times, went
+    // untaken), so it is answered anew and our pending reply forgotten. Ignoring it, as 0.15.1
+    // did, left both sides waiting for good.
     if received_message.generic.related_message_identity.writer_guid == GUID::GUID_UNKNOWN {
       let answered = self
         .stored_authentication_messages
@@ -1869,11 +1870,7 @@ impl SecureDiscovery {
       if answered == Some(received_message.generic.message_identity) {
         debug!("The request we answered came again from {remote_guid_prefix:?}: replying again");
         self.reset_stored_message_resend_counter(&remote_guid_prefix);
-        if let Some(stored) = self.stored_authentication_messages.get(&remote_guid_prefix) {
-          let _ = auth_msg_writer
-            .write(stored.message.clone(), None)
-            .map_err(|err| debug!("Failed to send the handshake reply again: {err}"));
-        }
+        self.resend_stored_handshake_message(remote_guid_prefix, auth_msg_writer);
       } else {
         info!(
           "A new handshake request from {remote_guid_prefix:?} while our reply to an earlier one \
@@ -2636,7 +2633,9 @@ impl SecureDiscovery {
     }
   }
 
-  fn resend_final_handshake_message(
+  // (CompoSuite-ROS patch: also re-sends a pending reply, so named for what it sends: the
+  // stored handshake message, our final message or our reply.)
+  fn resend_stored_handshake_message(
     &self,
     remote_guid_prefix: GuidPrefix,
     auth_msg_writer: &no_key::DataWriter<ParticipantStatelessMessage>,
@@ -2646,13 +2645,13 @@ impl SecureDiscovery {
         .write(stored_msg.message.clone(), None)
         .map_err(|err| {
           warn!(
-            "Failed to send a final handshake message. Remote GUID prefix: \
+            "Failed to send a stored handshake message again. Remote GUID prefix: \
              {remote_guid_prefix:?}. Error: {err}"
           );
         });
     } else {
       warn!(
-        "Did not find the final handshake request to send. Remote guid prefix: \
+        "Did not find the stored handshake message to send. Remote guid prefix: \
          {remote_guid_prefix:?}"
       );
     }
