@@ -130,7 +130,8 @@ impl Container {
         let ros_environment =
             RosEnvironment::read(|k| std::env::var(k).ok()).map_err(|e| e.to_string())?;
         // The composed nodes share one participant, so one enclave.
-        let context = new_context(&ros_environment, enclave).map_err(|e| e.to_string())?;
+        let context =
+            new_context(&ros_environment, enclave, "container").map_err(|e| e.to_string())?;
         let (ended_tx, ended_rx) = mpsc::channel();
         let mut container = Container {
             composition: Composition {

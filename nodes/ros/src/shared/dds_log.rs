@@ -1,10 +1,16 @@
 //! The DDS library's own log records (RustDDS and ros2-client use the `log` crate) on stderr,
 //! in the nodes' line format, so a discovery or transport problem leaves a trace.
 //!
+//! Each line names the participant's owner (the node, or the container of composed nodes), since
+//! the nodes of one launch usually share one log, and is written with one `write` call, so lines
+//! of processes writing to the same file do not interleave.
+//!
 //! The level comes from `COMPOSUITE_DDS_LOG` (`off`, `error`, `warn`, `info`, `debug`,
 //! `trace`; default `error`): RustDDS is chatty at `info` and below, so raise it only to
 //! investigate.
 
+use std::io::Write;
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{SystemTime, UNIX_EPOCH};
 
@@ -47,15 +53,41 @@ impl log::Log for StderrLog {
 /// Whether the key-exchange explanation was printed.
 static EXPLAINED: AtomicBool = AtomicBool::new(false);
 
+/// Who owns this process's participant, as its lines name it (set once, by `install`).
+static OWNER: OnceLock<String> = OnceLock::new();
+
 fn print_line(level: log::Level, target: &str, text: &std::fmt::Arguments<'_>) {
     let now = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .unwrap_or_default();
-    eprintln!(
-        "[{level}] [{}.{:09}] [dds {target}]: {text}",
+    let owner = OWNER.get().map(String::as_str).unwrap_or("?");
+    write_stderr_line(&line(level, now, owner, target, text));
+}
+
+/// One record as a line: `[LEVEL] [wall time] [dds OWNER TARGET]: text`.
+fn line(
+    level: log::Level,
+    now: std::time::Duration,
+    owner: &str,
+    target: &str,
+    text: &std::fmt::Arguments<'_>,
+) -> String {
+    format!(
+        "[{level}] [{}.{:09}] [dds {owner} {target}]: {text}",
         now.as_secs(),
         now.subsec_nanos(),
-    );
+    )
+}
+
+/// `line` and a newline on stderr in one `write` call: stderr is unbuffered, so `eprintln!`
+/// writes a formatted line piece by piece, and the pieces of processes sharing one log file
+/// interleave mid-line.
+pub fn write_stderr_line(line: &str) {
+    let mut bytes = Vec::with_capacity(line.len() + 1);
+    bytes.extend_from_slice(line.as_bytes());
+    bytes.push(b'\n');
+    // Nothing sensible to do if stderr is gone.
+    let _ = std::io::stderr().lock().write_all(&bytes);
 }
 
 /// Whether RustDDS logs `record` (as an error) because a secured message met an endpoint whose
@@ -82,10 +114,12 @@ pub fn parse_level(value: Option<&str>) -> Result<log::LevelFilter, String> {
     })
 }
 
-/// Send the `log` crate's records to stderr at `level`. Once per process; a second call (a
-/// logger already set, e.g. in tests) only changes the level.
-pub fn install(level: log::LevelFilter) {
+/// Send the `log` crate's records to stderr at `level`, each line naming `owner` (the node or
+/// container whose participant this is). Once per process; a second call (a logger already set,
+/// e.g. in tests) only changes the level.
+pub fn install(level: log::LevelFilter, owner: &str) {
     static LOGGER: StderrLog = StderrLog;
+    let _ = OWNER.set(format!("{owner} pid {}", std::process::id()));
     let _ = log::set_logger(&LOGGER);
     log::set_max_level(level);
 }
@@ -110,6 +144,22 @@ mod tests {
         assert!(
             err.contains("COMPOSUITE_DDS_LOG=loud") && err.contains("trace"),
             "{err}"
+        );
+    }
+
+    #[test]
+    fn a_line_names_the_participant_owner_and_the_source() {
+        let at = std::time::Duration::new(17, 5);
+        let text = line(
+            log::Level::Info,
+            at,
+            "/env_00/sim pid 42",
+            "rustdds::discovery",
+            &format_args!("Authenticated {}", 7),
+        );
+        assert_eq!(
+            text,
+            "[INFO] [17.000000005] [dds /env_00/sim pid 42 rustdds::discovery]: Authenticated 7"
         );
     }
 

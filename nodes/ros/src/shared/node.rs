@@ -112,14 +112,14 @@ impl Logger {
             .duration_since(UNIX_EPOCH)
             .unwrap_or_default();
         let text = message.to_string();
-        eprintln!(
+        dds_log::write_stderr_line(&format!(
             "[{}] [{}.{:09}] [{}]: {}",
             level.label(),
             now.as_secs(),
             now.subsec_nanos(),
             self.name,
             text
-        );
+        ));
         if let Some(rosout) = &self.rosout {
             let at = std::panic::Location::caller();
             let stamp = ros2_client::builtin_interfaces::Time::from_nanos(now.as_nanos() as i64);
@@ -365,7 +365,7 @@ impl RosNode {
 
         let context = match shared {
             Some(composition) => composition.context.clone(),
-            None => new_context(&environment, args.enclave.as_deref())?,
+            None => new_context(&environment, args.enclave.as_deref(), &fully_qualified)?,
         };
 
         // No ros2-client spinner (see param_server): parameters are served by our own thread.
@@ -676,14 +676,16 @@ pub fn shutdown_signal() -> std::io::Result<async_channel::Receiver<i32>> {
 
 /// A ROS context on a new DDS participant, as `environment` asks (domain, discovery range,
 /// DDS-Security with the files of the enclave rcl's switches and `enclave` choose), with
-/// RustDDS's own log records at the level `COMPOSUITE_DDS_LOG` sets.
+/// RustDDS's own log records at the level `COMPOSUITE_DDS_LOG` sets, each line naming `owner`
+/// (the node, or the container of composed nodes).
 pub fn new_context(
     environment: &RosEnvironment,
     enclave: Option<&str>,
+    owner: &str,
 ) -> Result<Context, StartError> {
     let dds_level = dds_log::parse_level(std::env::var(dds_log::DDS_LOG_VAR).ok().as_deref())
         .map_err(StartError)?;
-    dds_log::install(dds_level);
+    dds_log::install(dds_level, owner);
     let mut builder = DomainParticipantBuilder::new(environment.domain_id);
     if environment.discovery_range != DiscoveryRange::Subnet {
         builder = builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
