@@ -118,6 +118,14 @@ def run_peer(peer: Path, domain: int, *args: str, timeout: float = 120, namespac
                           env=env, capture_output=True, text=True, timeout=timeout)
 
 
+def peer_said(stderr: str, tail: int = 2500) -> str:
+    """The peer's stderr for a failure message: its own lines (`peer: ...`: which participants
+    it authenticated, why it failed) in full, then the end of the rest — Fast DDS's key-exchange
+    warnings would otherwise push them out of any tail."""
+    own = [line for line in stderr.splitlines() if line.startswith("peer: ")]
+    return "\n".join(own) + "\n---- peer's last output ----\n" + stderr[-tail:]
+
+
 def floats(hexes: list[str]) -> list[float]:
     return [struct.unpack("<d", bytes.fromhex(h))[0] for h in hexes]
 
@@ -130,7 +138,7 @@ def test_a_fastdds_peer_plays_a_secured_episode_bit_for_bit(peer, suite, keystor
     done = run_peer(peer, domain, "--enclave", str(keystore / "enclaves" / "fastdds_peer"),
                     "--seed", str(SEED), "--steps", str(STEPS))
     process, text = suite
-    assert done.returncode == 0, f"{done.stderr[-4000:]}\n---- suite ----\n{text()[-4000:]}"
+    assert done.returncode == 0, f"{peer_said(done.stderr)}\n---- suite ----\n{text()[-4000:]}"
     assert_episode_bit_for_bit(done.stdout, SEED, STEPS)
     assert process.poll() is None, text()[-4000:]
 
@@ -159,7 +167,7 @@ def test_a_fastdds_peer_without_credentials_gets_nothing(peer, suite, domain):
     """Security off on the peer: the suite's participants do not talk to an unauthenticated one
     (the governance allows none), so none of its endpoints match and no sample arrives."""
     done = run_peer(peer, domain, "--expect-no-suite", str(REFUSED_WINDOW_S))
-    assert done.returncode == 0, done.stdout + done.stderr[-3000:]
+    assert done.returncode == 0, done.stdout + peer_said(done.stderr)
     assert json.loads(done.stdout) == {"matched": 0, "observations": 0, "joint_states": 0}
 
 
@@ -171,7 +179,7 @@ def test_a_fastdds_peer_another_ca_signed_gets_nothing(peer, suite, tmp_path, do
     create("create-enclave", str(other), "/fastdds_peer", domain=domain)
     done = run_peer(peer, domain, "--enclave", str(other / "enclaves" / "fastdds_peer"),
                     "--expect-no-suite", str(REFUSED_WINDOW_S))
-    assert done.returncode == 0, done.stdout + done.stderr[-3000:]
+    assert done.returncode == 0, done.stdout + peer_said(done.stderr)
     assert json.loads(done.stdout)["matched"] == 0
 
 
@@ -185,7 +193,7 @@ def test_a_fastdds_peer_without_joint_command_permission_cannot_command(peer, su
     assert done.returncode == 1
     assert (f"rt{NS}/joint_command topic not found in allow rule" in done.stderr  # Fast DDS's
             and f"not allowed to create a DataWriter to topic rt{NS}/joint_command"
-            in done.stderr), done.stderr[-3000:]
+            in done.stderr), peer_said(done.stderr)
 
 
 def test_a_fastdds_peer_with_two_readers_of_one_topic_gets_both_fed(peer, suite, keystore,
@@ -198,7 +206,7 @@ def test_a_fastdds_peer_with_two_readers_of_one_topic_gets_both_fed(peer, suite,
     done = run_peer(peer, domain, "--enclave", str(keystore / "enclaves" / "fastdds_peer"),
                     "--seed", str(SEED), "--steps", str(steps), "--second-observation-reader",
                     timeout=90)
-    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.returncode == 0, peer_said(done.stderr)
     *episode, counts = done.stdout.splitlines()
     assert json.loads(counts)["second_reader_observations"] >= steps + 1
     assert_episode_bit_for_bit("\n".join(episode), SEED, steps)

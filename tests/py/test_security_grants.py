@@ -14,7 +14,8 @@ import subprocess
 import pytest
 
 import node_suite
-from test_security_fastdds import floats, peer, secured_launch  # noqa: F401  (peer: fixture)
+from test_security_fastdds import (  # noqa: F401  (peer: a fixture)
+    floats, peer, peer_said, secured_launch)
 
 COMPOSUITE = node_suite.node_dir() / "composuite"
 TASK = "Gen3/hollow_box/object_wall/push"
@@ -99,7 +100,7 @@ def test_nodes_in_their_own_enclaves_serve_an_agent_of_their_environment(peer, s
     env's."""
     done = run_agent(peer, domain, keystore / "enclaves" / "agent", STEPS)
     process, text = suite
-    assert done.returncode == 0, f"{done.stderr[-3000:]}\n---- suite ----\n{text()[-3000:]}"
+    assert done.returncode == 0, f"{peer_said(done.stderr)}\n---- suite ----\n{text()[-3000:]}"
     steps = [json.loads(line) for line in done.stdout.splitlines()][1:]
     commands = [{"joints": floats(s["command"]), "gripper": None} for s in steps[1:]]
     replay = node_suite.env_replay_run({"task": TASK, "seed": SEED, "commands": commands})
@@ -126,7 +127,7 @@ def test_an_agent_of_another_environment_cannot_command_this_one(peer, suite, ke
     done = run_agent(peer, domain, keystore / "enclaves" / "elsewhere", 1)
     assert done.returncode == 1
     assert f"not allowed to create a DataWriter to topic rt{NS}/joint_command" in done.stderr, \
-        done.stderr[-3000:]
+        peer_said(done.stderr)
 
 
 def test_an_agent_in_an_enclave_made_from_an_sros2_policy_plays(peer, suite, keystore, domain):
@@ -134,5 +135,5 @@ def test_an_agent_in_an_enclave_made_from_an_sros2_policy_plays(peer, suite, key
     (relative names in the profile's namespace, a service it calls) let it play."""
     done = run_agent(peer, domain, keystore / "enclaves" / "from_policy", 3)
     process, text = suite
-    assert done.returncode == 0, f"{done.stderr[-3000:]}\n---- suite ----\n{text()[-3000:]}"
+    assert done.returncode == 0, f"{peer_said(done.stderr)}\n---- suite ----\n{text()[-3000:]}"
     assert [json.loads(line).get("step") for line in done.stdout.splitlines()][1:] == [0, 1, 2, 3]

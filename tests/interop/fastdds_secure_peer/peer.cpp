@@ -18,6 +18,7 @@
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/log/StdoutErrConsumer.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -39,7 +40,6 @@
 #include <map>
 #include <memory>
 #include <regex>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -355,6 +355,27 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
+// A GUID prefix as RustDDS's logs write it: 24 hex digits.
+std::string hex_prefix(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
+  char text[2 * 12 + 1];
+  for (int i = 0; i < 12; ++i) std::snprintf(text + 2 * i, 3, "%02x", prefix.value[i]);
+  return text;
+}
+
+// Says on stderr how each remote participant's authentication ended (Debian's Fast DDS logs no
+// info records, and a refused handshake is otherwise silent): the suite's DDS logs name
+// participants by GUID prefix, so a test's failure message can tell which pair never trusted
+// each other.
+struct AuthenticationReport : DomainParticipantListener {
+  void onParticipantAuthentication(
+      DomainParticipant*, eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override {
+    const bool ok =
+        info.status == eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::AUTHORIZED_PARTICIPANT;
+    std::fprintf(stderr, "peer: %s participant %s\n", ok ? "authenticated" : "REFUSED",
+                 hex_prefix(info.guid.guidPrefix).c_str());
+  }
+};
+
 // The participant as rmw_fastrtps makes it from an enclave folder (rmw_dds_common's file
 // names, properties as rmw_fastrtps sets them), on UDPv4 only: no shared-memory transport, so
 // the peer cannot reach Fast DDS processes outside its network namespace through /dev/shm.
@@ -379,8 +400,9 @@ DomainParticipant* make_participant(const Args& a) {
                    file("permissions.p7s"));
     p.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
   }
-  auto* participant =
-      DomainParticipantFactory::get_instance()->create_participant(a.domain, qos);
+  static AuthenticationReport report;
+  auto* participant = DomainParticipantFactory::get_instance()->create_participant(
+      a.domain, qos, &report, StatusMask::none());
   if (participant == nullptr) fail("create_participant refused (security files or domain?)");
   return participant;
 }
@@ -444,11 +466,8 @@ int main(int argc, char** argv) {
     Log::SetVerbosity(Log::Kind::Warning);
   }
   auto* participant = make_participant(a);
-  {  // the suite's DDS logs name remote participants by GUID prefix: say which one is ours
-    std::ostringstream guid;
-    guid << participant->guid().guidPrefix;
-    std::fprintf(stderr, "peer: participant %s\n", guid.str().c_str());
-  }
+  // The suite's DDS logs name remote participants by GUID prefix: say which one is ours.
+  std::fprintf(stderr, "peer: participant %s\n", hex_prefix(participant->guid().guidPrefix).c_str());
   Endpoints e{participant, participant->create_publisher(PUBLISHER_QOS_DEFAULT),
               participant->create_subscriber(SUBSCRIBER_QOS_DEFAULT), {}, {}};
   const std::string js_type = "sensor_msgs::msg::dds_::JointState_";
