@@ -2105,7 +2105,14 @@ impl Discovery {
     // Security spec
     QosPolicyBuilder::new()
       .reliability(Reliability::BestEffort) // Important!
-      .history(History::KeepLast { depth: 1 })
+      // CompoSuite-ROS patch: 64 (the topic cache's default sample limit), not 1. Every
+      // participant sends its handshake messages to every stateless reader, most of them meant
+      // for another participant, and the discovery thread takes what has arrived when it gets to
+      // it. The DataReader's sample cache keeps the last `depth` samples of an instance, and this
+      // topic has one: with depth 1, of the messages that arrived between two takes only the
+      // last was handed over, and a reply or final message meant for this participant that
+      // another message followed was lost.
+      .history(History::KeepLast { depth: 64 })
       .build()
   }
 

@@ -618,6 +618,53 @@ pub(crate) fn result_ok_as_ref_err_clone<T, E: Clone>(r: &Sample<T, E>) -> Sampl
 
 #[cfg(test)]
 mod tests {
+  // CompoSuite-ROS patch: the stateless topic's reader hands over every message that arrived
+  // between two takes (see `create_participant_stateless_message_qos`).
+  #[cfg(feature = "security")]
+  #[test]
+  fn the_stateless_reader_hands_over_every_message_that_arrived_between_takes() {
+    use super::DataSampleCache;
+    use crate::{
+      dds::{key::Keyed, qos::QosPolicies, with_key::datasample::*},
+      discovery::discovery::Discovery,
+      structure::{guid::GUID, sequence_number::SequenceNumber, time::Timestamp},
+      with_key::WriteOptions,
+      ReadCondition,
+    };
+
+    // A handshake message: the topic has no key, so every sample is of one instance.
+    #[derive(Clone, Debug, PartialEq)]
+    struct Message(i64);
+    impl Keyed for Message {
+      type K = ();
+      fn key(&self) {}
+    }
+
+    let qos: QosPolicies = Discovery::create_participant_stateless_message_qos();
+    let mut cache = DataSampleCache::<Message>::new(qos);
+    // Sixteen handshake messages arrive before the discovery thread takes them: the first
+    // meant for this participant, the rest other participants' (every stateless reader gets all).
+    for sn in 1..=16 {
+      cache.fill_from_deserialized_cache_change(DeserializedCacheChange {
+        receive_instant: Timestamp::now(),
+        writer_guid: GUID::GUID_UNKNOWN,
+        sequence_number: SequenceNumber::new(sn),
+        write_options: WriteOptions::default(),
+        sample: Sample::Value(Message(sn)),
+      });
+    }
+    let keys = cache.select_keys_for_access(ReadCondition::not_read());
+    let taken: Vec<i64> = cache
+      .take_by_keys(&keys)
+      .into_iter()
+      .filter_map(|sample| match sample.value() {
+        Sample::Value(message) => Some(message.0),
+        Sample::Dispose(()) => None,
+      })
+      .collect();
+    assert_eq!(taken, (1..=16).collect::<Vec<_>>());
+  }
+
   // use super::*;
   // use crate::{
   //   structure::{time::Timestamp},

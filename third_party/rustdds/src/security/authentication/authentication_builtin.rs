@@ -4,7 +4,12 @@ use std::{
 };
 
 use bytes::Bytes;
-use openssl::{bn::BigNum, pkey::Private};
+use openssl::{
+  bn::BigNum,
+  derive::Deriver,
+  dh::Dh,
+  pkey::{PKey, Private},
+};
 use ring::agreement;
 
 use crate::{
@@ -147,8 +152,17 @@ impl DHKeys {
   fn compute_shared_secret(self, remote_dh_public_key: Bytes) -> SecurityResult<SharedSecret> {
     let shared_secret = match self {
       DHKeys::Modp(openssl_dh) => {
+        // CompoSuite-ROS patch: the secret as EVP_PKEY_derive gives it, without leading zero
+        // bytes — what Fast DDS's PKI-DH plugin hashes. 0.15.1 used `Dh::compute_key`, which
+        // returns DH_size bytes whatever length DH_compute_key wrote: a secret with a leading
+        // zero byte (one handshake in 256) was hashed with a zero byte appended, and the two
+        // sides' keys differed though both had authenticated.
         let remote_public = BigNum::from_slice(&remote_dh_public_key)?;
-        let secret_key = openssl_dh.compute_key(&remote_public)?;
+        let remote = PKey::from_dhx(Dh::get_2048_256()?.set_public_key(remote_public)?)?;
+        let local = PKey::from_dhx(openssl_dh)?;
+        let mut deriver = Deriver::new(&local)?;
+        deriver.set_peer(&remote)?;
+        let secret_key = deriver.derive_to_vec()?;
         SharedSecret::from(Sha256::hash(&secret_key))
       }
       DHKeys::EC(ring_dh) => {
@@ -279,5 +293,58 @@ impl AuthenticationBuiltin {
     ring::rand::generate::<[u8; 32]>(&self.secure_random_generator)
       .map(|random| random.expose())
       .map_err(|e| security_error(&format!("Failed to generate random bytes: {e}")))
+  }
+}
+
+// CompoSuite-ROS patch: the MODP shared secret is hashed without leading zero bytes, as Fast DDS's
+// PKI-DH plugin (EVP_PKEY_derive) hashes it.
+#[cfg(test)]
+mod tests {
+  use openssl::bn::{BigNum, BigNumContext};
+
+  use super::*;
+
+  // peer_public ^ private mod p: the secret computed without OpenSSL's DH.
+  fn power(private: &openssl::dh::Dh<Private>, peer_public: &[u8]) -> BigNum {
+    let mut power = BigNum::new().unwrap();
+    power
+      .mod_exp(
+        &BigNum::from_slice(peer_public).unwrap(),
+        private.private_key(),
+        private.prime_p(),
+        &mut BigNumContext::new().unwrap(),
+      )
+      .unwrap();
+    power
+  }
+
+  #[test]
+  fn a_modp_secret_with_a_leading_zero_byte_is_hashed_without_it() {
+    // One pair in 256 has such a secret: look until one does (the bound only stops a broken
+    // key generator).
+    for _ in 0..20_000 {
+      let (DHKeys::Modp(a), DHKeys::Modp(b)) =
+        (DHKeys::new_modp_keys().unwrap(), DHKeys::new_modp_keys().unwrap())
+      else {
+        unreachable!("new_modp_keys makes MODP keys");
+      };
+      let (a_public, b_public) = (a.public_key().to_vec(), b.public_key().to_vec());
+      let secret = power(&a, &b_public);
+      if secret.num_bytes() == 256 {
+        continue;
+      }
+      // Its minimal big-endian bytes, hashed.
+      let want = SharedSecret::from(Sha256::hash(&secret.to_vec()));
+      let from_a = DHKeys::Modp(a)
+        .compute_shared_secret(Bytes::from(b_public))
+        .unwrap();
+      let from_b = DHKeys::Modp(b)
+        .compute_shared_secret(Bytes::from(a_public))
+        .unwrap();
+      assert_eq!(from_a, want);
+      assert_eq!(from_b, want);
+      return;
+    }
+    panic!("no pair with a leading zero byte in its secret");
   }
 }
