@@ -1857,11 +1857,10 @@ impl SecureDiscovery {
     );
 
     // CompoSuite-ROS patch: a request (it relates to no earlier message) while our reply waits
-    // for its final message. The request we answered, again: our reply may not have arrived, so
-    // it is sent again. A new request: the initiator has given the one we answered up (a Fast
-    // DDS agent was seen asking once a second for 30 s while our reply, sent ten times, went
-    // untaken), so it is answered anew and our pending reply forgotten. Ignoring it, as 0.15.1
-    // did, left both sides waiting for good.
+    // for its final message. The request we answered, again: the initiator has not taken our
+    // reply, so it is sent again (Fast DDS re-sends the request it holds once a second until it
+    // takes a reply). A new request: the initiator has started over, so it is answered anew and
+    // our pending reply forgotten. 0.15.1 ignored both.
     if received_message.generic.related_message_identity.writer_guid == GUID::GUID_UNKNOWN {
       let answered = self
         .stored_authentication_messages

@@ -516,9 +516,8 @@ impl Authentication for AuthenticationBuiltin {
 
     // Make sure we are expecting a authentication request from remote.
     // (CompoSuite-ROS patch: also while our reply to an earlier request waits for its final
-    // message. The initiator may have given that request up and sent a new one; the new one
-    // replaces it, as a new handshake. Refusing it left both sides waiting for each other for
-    // good: the initiator for a reply to its current request, we for a final message.)
+    // message: a new request from the same initiator replaces that handshake, as a new one,
+    // where 0.15.1 refused it and waited for a final message the initiator would not send.)
     let remote_info = self.get_remote_participant_info(&initiator_identity_handle)?;
     if let BuiltinHandshakeState::PendingRequestMessage
     | BuiltinHandshakeState::PendingFinalMessage { .. } = remote_info.handshake.state
