@@ -168,7 +168,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=20_000, help="env steps per run (multiple of 500)")
     parser.add_argument("--rounds", type=int, default=2, help="runs of each kind, alternating")
     parser.add_argument("--task", default="IIWA/box/no_obstacle/pick_place")
-    parser.add_argument("--policy", default="zero", help="expert, random or zero (the cheapest agent)")
+    parser.add_argument("--policy", default="zero", help="expert, planned, random or zero (the cheapest agent)")
     parser.add_argument("--record-only", action="store_true",
                         help="only the recorded runs (for the recorder's RSS over a long session)")
     parser.add_argument("--rss-every", type=float, default=0.0, metavar="SECONDS",

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import msgcheck
+import numpy as np
 import node_suite
 from test_recorder import bag_messages, composuite, metadata
 
@@ -177,6 +178,35 @@ def test_the_expert_session_succeeds(tmp_path):
     assert "[ERROR]" not in result.stderr, [line for line in result.stderr.splitlines() if "[ERROR]" in line]
 
 
+def test_a_planned_expert_session_is_the_expert_dataset_of_its_seeds(tmp_path):
+    """`--policy planned`: the planned expert acts with the reference's 8 numbers on
+    reference_action_stamped, so the recorded session is a dataset (`from-bag`) — and the very
+    rows an `expert` file of the same task, seeds and horizon stores, bit for bit."""
+    from composuite_ros import datasets
+    from composuite_ros.datasets.from_bag import from_bag
+
+    out = tmp_path / "planned"
+    result = session("--policy", "planned", "--episodes", "2", "--seed", "5", "--horizon", "60",
+                     "--out", str(out), "--json")
+    assert result.returncode == 0, result.stderr[-4000:]
+    rows = json.loads(result.stdout)
+    assert [r["seed"] for r in rows] == [5, 6], rows  # (and a non-zero exit had any differed)
+    topics = {t["topic_metadata"]["name"] for t in metadata(out / "bag")["topics_with_message_count"]}
+    assert any(t.endswith("/reference_action_stamped") for t in topics), topics
+    assert not any(t.endswith("/joint_command") for t in topics), topics
+
+    (recorded,) = from_bag(out / "bag", tmp_path / "data", command="test")
+    task = TASKS[0]
+    (generated,) = datasets.generate(tmp_path / "generated", datasets.select_tasks([task]),
+                                     ["expert"], transitions=120, first_seed=5, horizon=60,
+                                     threads=1)
+    a, b = datasets.open_task(recorded), datasets.open_task(generated)
+    assert a.episodes() == b.episodes() == [(0, 60, 5), (60, 120, 6)]
+    for key in ("observations", "actions", "rewards", "terminals", "timeouts", "successes"):
+        assert np.array_equal(a[key][:], b[key][:]), key
+    assert np.abs(a["actions"][:, :7]).max() > 0.5, "the expert moved the arm"
+
+
 def started_session(out: Path, *args: str) -> tuple[subprocess.Popen, Path]:
     """A `composuite session` running in the background, its stderr in a file beside `out`."""
     node_suite.require_isolation()
@@ -259,7 +289,7 @@ def test_a_killed_session_takes_its_nodes_with_it_and_the_bag_is_closed(tmp_path
 
 def test_bad_session_arguments_are_named(tmp_path):
     result = session("--policy", "clever", "--out", str(tmp_path / "x"))
-    assert result.returncode == 2 and "valid: expert, random, zero" in result.stderr
+    assert result.returncode == 2 and "valid: expert, planned, random, zero" in result.stderr
     result = session("--tasks", "IIWA/cube/no_obstacle/push", "--out", str(tmp_path / "y"))
     assert result.returncode == 2 and "--tasks" in result.stderr
     (tmp_path / "z").mkdir()

@@ -9,6 +9,7 @@ use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
 use composuite_core::TaskSpec;
+use composuite_core::dataset::{ActionSource, ExpertActions};
 use composuite_core::env::{Action, Env, EnvConfig};
 use composuite_core::expert::Expert;
 use composuite_core::physics::{ARM_DOF, FINGER_JOINTS, finger_for_gap, pad_gap, robot_model};
@@ -16,6 +17,7 @@ use composuite_msgs::msg;
 use composuite_msgs::sensor_msgs::msg::JointState;
 use composuite_msgs::srv;
 use composuite_msgs::std_msgs::msg::Header;
+use composuite_ros::shared::intra_process::Publisher;
 use composuite_ros::shared::node::{NodeSpec, RosNode, Startup};
 use composuite_ros::shared::{convert, names, qos};
 use futures::{FutureExt, StreamExt};
@@ -41,8 +43,13 @@ const AGENT: NodeSpec = NodeSpec {
 /// Who chooses the commands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PolicyKind {
-    /// The scripted expert.
+    /// The scripted expert (absolute joint targets on `joint_command`).
     Expert,
+    /// The planned expert: the reference's 8 numbers on `reference_action_stamped`, as an agent
+    /// written for CompoSuite acts, rounded to `f32` as an `expert` dataset stores them — a
+    /// recorded session of it is also a dataset (`composuite-dataset from-bag`), its episodes
+    /// those of an `expert` file with the same seeds.
+    Planned,
     /// Joint goals = measured q + 0.05·U(−1, 1) per joint (the reference's action scale for
     /// a uniform random action), gripper left as it is.
     Random,
@@ -51,14 +58,15 @@ pub enum PolicyKind {
 }
 
 impl PolicyKind {
-    /// `expert`, `random` or `zero`.
+    /// `expert`, `planned`, `random` or `zero`.
     pub fn parse(s: &str) -> Result<PolicyKind, String> {
         match s {
             "expert" => Ok(PolicyKind::Expert),
+            "planned" => Ok(PolicyKind::Planned),
             "random" => Ok(PolicyKind::Random),
             "zero" => Ok(PolicyKind::Zero),
             other => Err(format!(
-                "policy `{other}` is unknown; valid: expert, random, zero"
+                "policy `{other}` is unknown; valid: expert, planned, random, zero"
             )),
         }
     }
@@ -67,6 +75,7 @@ impl PolicyKind {
     pub fn name(self) -> &'static str {
         match self {
             PolicyKind::Expert => "expert",
+            PolicyKind::Planned => "planned",
             PolicyKind::Random => "random",
             PolicyKind::Zero => "zero",
         }
@@ -76,6 +85,7 @@ impl PolicyKind {
 /// One policy for one episode.
 enum Policy {
     Expert(Box<Expert>),
+    Planned(Box<ExpertActions>),
     Random(Box<rand_chacha::ChaCha8Rng>),
     Zero([f64; ARM_DOF]),
 }
@@ -84,6 +94,7 @@ impl Policy {
     fn new(kind: PolicyKind, task: TaskSpec, seed: u64, env: &Env) -> Policy {
         match kind {
             PolicyKind::Expert => Policy::Expert(Box::new(Expert::new(task))),
+            PolicyKind::Planned => Policy::Planned(Box::new(ExpertActions::new(task, seed, 0.0))),
             PolicyKind::Random => {
                 Policy::Random(Box::new(rand_chacha::ChaCha8Rng::seed_from_u64(seed)))
             }
@@ -91,25 +102,68 @@ impl Policy {
         }
     }
 
-    /// Arm joint targets and, when the gripper is commanded, its finger joint target.
-    fn act(&mut self, env: &Env) -> Result<([f64; ARM_DOF], Option<f64>), String> {
+    /// The next command.
+    fn act(&mut self, env: &Env) -> Result<Command, String> {
         match self {
             Policy::Expert(expert) => match expert.act(env) {
-                Action::Absolute { joints, gripper } => {
-                    Ok((joints, gripper.map(|(gap, _)| finger_for_gap(gap))))
-                }
+                Action::Absolute { joints, gripper } => Ok(Command::Joints {
+                    joints,
+                    finger: gripper.map(|(gap, _)| finger_for_gap(gap)),
+                }),
                 Action::Reference(_) => Err("the expert acted with a reference action".into()),
             },
+            Policy::Planned(expert) => Ok(Command::Reference(expert.action(env).map(f64::from))),
             Policy::Random(rng) => {
                 let mut q = measured(env);
                 for v in &mut q {
                     *v += 0.05 * rng.random_range(-1.0..=1.0);
                 }
-                Ok((q, None))
+                Ok(Command::Joints {
+                    joints: q,
+                    finger: None,
+                })
             }
-            Policy::Zero(home) => Ok((*home, None)),
+            Policy::Zero(home) => Ok(Command::Joints {
+                joints: *home,
+                finger: None,
+            }),
         }
     }
+}
+
+/// The agent's command topic: the one its policy's commands go on.
+enum CommandWriter {
+    Joints(Publisher<JointState>),
+    Reference(Publisher<msg::ReferenceAction>),
+}
+
+impl CommandWriter {
+    fn topic(&self) -> &'static str {
+        match self {
+            CommandWriter::Joints(_) => names::JOINT_COMMAND,
+            CommandWriter::Reference(_) => names::REFERENCE_ACTION_STAMPED,
+        }
+    }
+
+    /// Every reader has what was published (true), up to [`ACKNOWLEDGE_TIMEOUT`].
+    fn wait_for_acknowledgments(&self) -> ros2_client::WriteResult<bool, ()> {
+        match self {
+            CommandWriter::Joints(p) => p.wait_for_acknowledgments(ACKNOWLEDGE_TIMEOUT),
+            CommandWriter::Reference(p) => p.wait_for_acknowledgments(ACKNOWLEDGE_TIMEOUT),
+        }
+    }
+}
+
+/// One step's command, in the form its topic takes.
+enum Command {
+    /// Arm joint targets and, when the gripper is commanded, its finger joint target
+    /// (`joint_command`).
+    Joints {
+        joints: [f64; ARM_DOF],
+        finger: Option<f64>,
+    },
+    /// The reference's 8 numbers (`reference_action_stamped`).
+    Reference([f64; 8]),
 }
 
 fn measured(env: &Env) -> [f64; ARM_DOF] {
@@ -215,9 +269,18 @@ pub fn drive(
         Startup::Help(_) => unreachable!("no --help given"),
     };
     let e = |e: composuite_ros::shared::node::StartError| e.to_string();
-    let command = node
-        .publisher::<JointState>(names::JOINT_COMMAND, qos::state())
-        .map_err(e)?;
+    // Only the topic the policy commands on: a recorded session then holds the commands its
+    // agent sent and no empty topic beside them.
+    let command = match plan.policy {
+        PolicyKind::Planned => CommandWriter::Reference(
+            node.publisher(names::REFERENCE_ACTION_STAMPED, qos::state())
+                .map_err(e)?,
+        ),
+        PolicyKind::Expert | PolicyKind::Random | PolicyKind::Zero => CommandWriter::Joints(
+            node.publisher(names::JOINT_COMMAND, qos::state())
+                .map_err(e)?,
+        ),
+    };
     let observations = node
         .subscription::<msg::Observation>(names::OBSERVATION, qos::state())
         .map_err(e)?;
@@ -230,7 +293,7 @@ pub fn drive(
     let reset = node.client::<srv::Reset>(names::RESET).map_err(e)?;
     let set_task = node.client::<srv::SetTask>(names::SET_TASK).map_err(e)?;
     if plan.wait_for_recorder {
-        wait_for_recorder(&node, &plan.namespace, suite)?;
+        wait_for_recorder(&node, &plan.namespace, command.topic(), suite)?;
     }
     let mut outcomes = Vec::new();
     let mut interrupt = Interrupt {
@@ -299,32 +362,42 @@ pub fn drive(
                     if interrupt.now {
                         return Ok(());
                     }
-                    let (joints, finger) = policy.act(&twin)?;
-                    // The gripper rides in the same message (a finger joint target), so arm and
-                    // gripper change in the same step.
-                    let mut names: Vec<String> = joint_names[..ARM_DOF].to_vec();
-                    let mut positions = joints.to_vec();
-                    if let Some(q) = finger {
-                        names.push(FINGER_JOINTS[0].into());
-                        positions.push(q);
-                    }
-                    command
-                        .publish(JointState {
-                            header: Header {
-                                stamp: answered.clone(),
-                                frame_id: String::new(),
-                            },
-                            name: names,
-                            position: positions,
-                            ..Default::default()
-                        })
-                        .map_err(|e| format!("joint_command: {e:?}"))?;
-                    let step = twin
-                        .step(&Action::Absolute {
-                            joints,
-                            gripper: finger.map(|q| (pad_gap(q), 0.0)),
-                        })
-                        .map_err(|e| e.to_string())?;
+                    let header = Header {
+                        stamp: answered.clone(),
+                        frame_id: String::new(),
+                    };
+                    let action = match (policy.act(&twin)?, &command) {
+                        (Command::Joints { joints, finger }, CommandWriter::Joints(command)) => {
+                            // The gripper rides in the same message (a finger joint target), so
+                            // arm and gripper change in the same step.
+                            let mut names: Vec<String> = joint_names[..ARM_DOF].to_vec();
+                            let mut positions = joints.to_vec();
+                            if let Some(q) = finger {
+                                names.push(FINGER_JOINTS[0].into());
+                                positions.push(q);
+                            }
+                            command
+                                .publish(JointState {
+                                    header,
+                                    name: names,
+                                    position: positions,
+                                    ..Default::default()
+                                })
+                                .map_err(|e| format!("joint_command: {e:?}"))?;
+                            Action::Absolute {
+                                joints,
+                                gripper: finger.map(|q| (pad_gap(q), 0.0)),
+                            }
+                        }
+                        (Command::Reference(action), CommandWriter::Reference(command)) => {
+                            command
+                                .publish(msg::ReferenceAction { header, action })
+                                .map_err(|e| format!("reference_action_stamped: {e:?}"))?;
+                            Action::Reference(action)
+                        }
+                        _ => unreachable!("the writer is chosen by the policy"),
+                    };
+                    let step = twin.step(&action).map_err(|e| e.to_string())?;
                     let key = (reply.episode, twin.steps());
                     if !seen.wait_for(key, &mut incoming, STEP_TIMEOUT).await {
                         return Err(format!(
@@ -360,7 +433,7 @@ pub fn drive(
     if plan.wait_for_recorder {
         // The last commands may still be on their way to the recorder, which is slower than
         // the sim under load: dropping the writer now would lose them from the bag.
-        match command.wait_for_acknowledgments(ACKNOWLEDGE_TIMEOUT) {
+        match command.wait_for_acknowledgments() {
             Ok(true) => {}
             Ok(false) => eprintln!(
                 "warning: the recorder did not acknowledge the last commands within {ACKNOWLEDGE_TIMEOUT:?}; the bag may miss them"
@@ -379,7 +452,12 @@ pub fn drive(
 /// (`clock`, `joint_states`, `success`, `tf`, `object_markers`) have a reader, and
 /// `joint_command` has two (the sim and the recorder); then a moment for the readers to match
 /// their writers.
-fn wait_for_recorder(node: &RosNode, namespace: &str, suite: &mut Suite) -> Result<(), String> {
+fn wait_for_recorder(
+    node: &RosNode,
+    namespace: &str,
+    command_topic: &str,
+    suite: &mut Suite,
+) -> Result<(), String> {
     let ns = namespace.trim_end_matches('/');
     let wanted = [
         (names::CLOCK, 1),
@@ -387,7 +465,7 @@ fn wait_for_recorder(node: &RosNode, namespace: &str, suite: &mut Suite) -> Resu
         (names::SUCCESS, 1),
         (names::TF, 1),
         (names::OBJECT_MARKERS, 1),
-        (names::JOINT_COMMAND, 2),
+        (command_topic, 2),
     ];
     let participant = node.context.domain_participant();
     let deadline = Instant::now() + STARTUP_TIMEOUT;

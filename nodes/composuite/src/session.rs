@@ -41,8 +41,10 @@ pub struct SessionArgs {
     /// Episodes per task.
     #[arg(long, default_value_t = 3)]
     episodes: u32,
-    /// The agent: expert (the scripted expert), random (joint goals measured q + 0.05·U(-1,1)),
-    /// zero (hold the start pose).
+    /// The agent: expert (the scripted expert, absolute joint targets), planned (the planned
+    /// expert, the reference's 8 numbers on reference_action_stamped: the recorded session is
+    /// also a dataset, `composuite-dataset from-bag`), random (joint goals measured
+    /// q + 0.05·U(-1,1)), zero (hold the start pose).
     #[arg(long, default_value = "expert")]
     policy: String,
     /// Seed of each task's first episode.
