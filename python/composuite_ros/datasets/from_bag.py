@@ -118,7 +118,8 @@ def _actions(episode: Episode) -> np.ndarray:
         raise DatasetError(
             f"{where} was driven by joint_command (absolute joint targets), not in the "
             "reference's action space: a dataset stores the reference's 8 numbers "
-            "(reference_action_stamped / reference_action), so this session cannot become one")
+            "(reference_action_stamped / reference_action), so this session cannot become one; "
+            "`composuite session --policy planned` records the planned expert in that space")
     rows = [values for _, _, values, stamp in episode.commands
             if stamp == 0 or stamp >= episode.start_stamp]
     rows = rows[:episode.horizon]
