@@ -185,9 +185,10 @@ def test_a_planned_expert_session_is_the_expert_dataset_of_its_seeds(tmp_path):
     from composuite_ros import datasets
     from composuite_ros.datasets.from_bag import from_bag
 
+    task = TASKS[0]
     out = tmp_path / "planned"
-    result = session("--policy", "planned", "--episodes", "2", "--seed", "5", "--horizon", "60",
-                     "--out", str(out), "--json")
+    result = session("--tasks", task, "--policy", "planned", "--episodes", "2", "--seed", "5",
+                     "--horizon", "60", "--out", str(out), "--json")
     assert result.returncode == 0, result.stderr[-4000:]
     rows = json.loads(result.stdout)
     assert [r["seed"] for r in rows] == [5, 6], rows  # (and a non-zero exit had any differed)
@@ -196,7 +197,6 @@ def test_a_planned_expert_session_is_the_expert_dataset_of_its_seeds(tmp_path):
     assert not any(t.endswith("/joint_command") for t in topics), topics
 
     (recorded,) = from_bag(out / "bag", tmp_path / "data", command="test")
-    task = TASKS[0]
     (generated,) = datasets.generate(tmp_path / "generated", datasets.select_tasks([task]),
                                      ["expert"], transitions=120, first_seed=5, horizon=60,
                                      threads=1)

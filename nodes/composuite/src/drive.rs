@@ -449,9 +449,9 @@ pub fn drive(
 }
 
 /// Until a recorder reads the environment's topics: topics only a recorder subscribes to
-/// (`clock`, `joint_states`, `success`, `tf`, `object_markers`) have a reader, and
-/// `joint_command` has two (the sim and the recorder); then a moment for the readers to match
-/// their writers.
+/// (`clock`, `joint_states`, `success`, `tf`, `object_markers`) have a reader, and the agent's
+/// `command_topic` (`joint_command`, or `reference_action_stamped` for the planned expert) has
+/// two (the sim and the recorder); then a moment for the readers to match their writers.
 fn wait_for_recorder(
     node: &RosNode,
     namespace: &str,
