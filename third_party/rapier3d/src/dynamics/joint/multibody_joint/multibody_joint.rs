@@ -292,20 +292,24 @@ impl MultibodyJoint {
     /// CompoSuite-ROS patch: the number of motor and limit rows [`Self::velocity_constraints`]
     /// emits with the same `only_active`.
     pub(crate) fn num_velocity_constraints_to_build(&self, only_active: bool) -> usize {
-        let locked_bits = self.data.locked_axes.bits();
-        let limit_bits = self.data.limit_axes.bits();
-        let motor_bits = self.data.motor_axes.bits();
+        // Only the axes that are free and have a limit or a motor can have a row: visited by
+        // their bits (a revolute joint has one such axis of six).
+        let free_bits = !self.data.locked_axes.bits() & ((1 << SPATIAL_DIM) - 1);
+        let limit_bits = self.data.limit_axes.bits() & free_bits;
+        let motor_bits = self.data.motor_axes.bits() & free_bits;
         let mut num_constraints = 0;
 
-        for i in 0..SPATIAL_DIM {
-            if (locked_bits & (1 << i)) == 0 {
-                if (limit_bits & (1 << i)) != 0 && self.limit_row_can_act(i, only_active) {
-                    num_constraints += 1;
-                }
-                if (motor_bits & (1 << i)) != 0 && self.motor_row_can_act(i, only_active) {
-                    num_constraints += 1;
-                }
-            }
+        let mut limited = limit_bits;
+        while limited != 0 {
+            let i = limited.trailing_zeros() as usize;
+            limited &= limited - 1;
+            num_constraints += self.limit_row_can_act(i, only_active) as usize;
+        }
+        let mut motorised = motor_bits;
+        while motorised != 0 {
+            let i = motorised.trailing_zeros() as usize;
+            motorised &= motorised - 1;
+            num_constraints += self.motor_row_can_act(i, only_active) as usize;
         }
 
         num_constraints

@@ -280,6 +280,25 @@ impl JointGenericInternalConstraintBuilder {
             + multibody.num_couplings_owned_by(link_id.id)
     }
 
+    /// CompoSuite-ROS patch: whether [`Self::num_constraints`] is non-zero, from the cheapest
+    /// count first and stopping at the first non-zero one (the island's builders are counted
+    /// this way every step).
+    pub fn has_constraints(
+        multibodies: &MultibodyJointSet,
+        link_id: &MultibodyLinkId,
+        only_active: bool,
+    ) -> bool {
+        let multibody = &multibodies[link_id.multibody];
+        multibody.num_friction_constraints(link_id.id) > 0
+            || multibody.num_couplings_owned_by(link_id.id) > 0
+            || multibody
+                .link(link_id.id)
+                .unwrap()
+                .joint()
+                .num_velocity_constraints_to_build(only_active)
+                > 0
+    }
+
     pub fn generate(
         multibodies: &MultibodyJointSet,
         link_id: &MultibodyLinkId,

@@ -80,12 +80,11 @@ impl JointConstraintsSet {
         let mut num_internal_constraint_builders = 0;
         for handle in island_bodies {
             if let Some(link_id) = multibodies.rigid_body_link(*handle) {
-                if JointGenericInternalConstraintBuilder::num_constraints(
+                if JointGenericInternalConstraintBuilder::has_constraints(
                     multibodies,
                     link_id,
                     only_active,
-                ) > 0
-                {
+                ) {
                     num_internal_constraint_builders += 1;
                 }
             }
