@@ -192,15 +192,23 @@ fn solve_ik_with(
 
 /// `J·Jᵀ + λ²·I`: what nalgebra's `jac * jac.transpose() + I * λ * λ` computes, bit for bit
 /// (each entry summed over the columns in order, the identity term added to every entry), without
-/// its generic product loops and the transpose's copy.
+/// its generic product loops and the transpose's copy. Entry (j, i) is entry (i, j) mirrored:
+/// its products are the same pairs the other way round, which IEEE multiplication gives
+/// identically, summed in the same order.
 fn damped_gram(jac: &SMatrix<f64, 6, ARM_DOF>, lambda_squared: f64) -> SMatrix<f64, 6, 6> {
-    SMatrix::from_fn(|i, j| {
-        let mut sum = jac[(i, 0)] * jac[(j, 0)];
-        for k in 1..ARM_DOF {
-            sum += jac[(i, k)] * jac[(j, k)];
+    let mut gram = SMatrix::<f64, 6, 6>::zeros();
+    for i in 0..6 {
+        for j in i..6 {
+            let mut sum = jac[(i, 0)] * jac[(j, 0)];
+            for k in 1..ARM_DOF {
+                sum += jac[(i, k)] * jac[(j, k)];
+            }
+            let entry = sum + if i == j { lambda_squared } else { 0.0 };
+            gram[(i, j)] = entry;
+            gram[(j, i)] = entry;
         }
-        sum + if i == j { lambda_squared } else { 0.0 }
-    })
+    }
+    gram
 }
 
 /// `Jᵀ·x`, as nalgebra's `jac.transpose() * x` computes it, bit for bit (summed over the rows in
