@@ -96,7 +96,7 @@ def camera_params(camera: str, size: int) -> list[str]:
 
 def bench_task(composuite: str, task: str, steps: int, horizon: int, rss_every: float = 0.0,
                camera: str = "", camera_size: int = 84, camera_read: bool = True) -> dict:
-    domain = random.randint(1, 200)
+    domain = node_suite.random_domain()
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
     failed = False
     suite = subprocess.Popen(

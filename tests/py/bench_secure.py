@@ -111,7 +111,7 @@ def main() -> None:
     if not 2 <= args.steps <= 500:
         parser.error(f"--steps {args.steps}: between 2 and 500 (an episode's horizon)")
     peer = node_suite.fastdds_peer()
-    domain = 40 + os.getpid() % 150
+    domain = 1 + os.getpid() % node_suite.MAX_TEST_DOMAIN
     results: dict[str, list[dict]] = {"plain": [], "secured": []}
     with tempfile.TemporaryDirectory(prefix="bench-secure-") as scratch:
         ks = keystore(args.composuite, domain, Path(scratch))

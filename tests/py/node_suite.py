@@ -134,10 +134,23 @@ def fastdds_peer() -> Path:
     return peer
 
 
+# The largest ROS_DOMAIN_ID a test picks. A domain's DDS ports are 7400 + 250·id + a few
+# dozen; above 101 they land in Linux's ephemeral port range (32768–60999), where any process's
+# outgoing socket may already hold one, and the participant then cannot bind it ("failed to
+# bind to ANY:57151: address in use" on domain 199, once in a CI run). ROS 2 advises 0–101 on
+# Linux for the same reason.
+MAX_TEST_DOMAIN = 101
+
+
 def random_domain() -> int:
     """A ROS_DOMAIN_ID for one test module, so modules never see each other's nodes."""
     require_isolation()
-    return random.SystemRandom().randint(1, 200)
+    return random.SystemRandom().randint(1, MAX_TEST_DOMAIN)
+
+
+def other_domain(domain: int) -> int:
+    """A domain other than `domain`, also at most [`MAX_TEST_DOMAIN`]."""
+    return domain % MAX_TEST_DOMAIN + 1
 
 
 # Two-host mode (tests/py/test_two_hosts.py): the name of the network namespace the suite's

@@ -164,12 +164,12 @@ def test_a_bad_camera_parameter_stops_the_sim_naming_what_is_valid(value, says):
     node_suite.require_isolation()
     result = subprocess.run(
         [str(node_suite.node_dir() / "sim_node"), "--ros-args", "-r", "__ns:=/badcam", "-p", f"cameras:={value}"],
-        env=dict(os.environ, ROS_DOMAIN_ID="201"), capture_output=True, text=True, timeout=30)
+        env=dict(os.environ, ROS_DOMAIN_ID=str(node_suite.random_domain())), capture_output=True, text=True, timeout=30)
     assert result.returncode != 0
     assert says in result.stderr, result.stderr
     size = subprocess.run(
         [str(node_suite.node_dir() / "sim_node"), "--ros-args", "-p", "camera_width:=0"],
-        env=dict(os.environ, ROS_DOMAIN_ID="201"), capture_output=True, text=True, timeout=30)
+        env=dict(os.environ, ROS_DOMAIN_ID=str(node_suite.random_domain())), capture_output=True, text=True, timeout=30)
     assert size.returncode != 0 and "1 to 4096" in size.stderr, size.stderr
 
 

@@ -6,7 +6,6 @@ agent over real DDS, inside the loopback-only namespace the test command provide
 
 import ast
 import os
-import random
 import re
 import signal
 import subprocess
@@ -41,7 +40,7 @@ def launch(*args: str, domain: int) -> subprocess.Popen:
 
 def test_two_realtime_environments_run_and_stop_cleanly_on_sigterm():
     # --isolate: each node a process of its own (the composed default: test_composed.py).
-    domain = random.randint(1, 200)
+    domain = node_suite.random_domain()
     suite = launch("--envs", "2", "--isolate", "--namespace", "/lt", "--params-file",
                    str(REPO / "params/realtime.yaml"), "--log-level", "warn", domain=domain)
     try:
@@ -72,7 +71,7 @@ def test_two_realtime_environments_run_and_stop_cleanly_on_sigterm():
 
 
 def test_a_dying_node_stops_the_suite_with_an_error_without_respawn():
-    domain = random.randint(1, 200)
+    domain = node_suite.random_domain()
     suite = launch("--namespace", "/die", "--respawn", "0", "--log-level", "warn", domain=domain)
     try:
         deadline = time.monotonic() + 20
@@ -91,7 +90,7 @@ def test_a_dying_node_stops_the_suite_with_an_error_without_respawn():
 
 
 def test_a_node_is_started_again_up_to_the_respawn_limit_then_the_suite_stops():
-    domain = random.randint(1, 200)
+    domain = node_suite.random_domain()
     suite = launch("--namespace", "/again", "--respawn", "1", "--respawn-delay", "0.2", "--log-level", "warn",
                    domain=domain)
 
@@ -201,7 +200,7 @@ def test_node_help_and_bad_arguments(binary):
 
 
 def test_ros_domain_id_is_honoured_and_checked():
-    domain = random.randint(1, 100)
+    domain = node_suite.random_domain()
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     node = subprocess.Popen([str(bin_dir() / "reward_node"), "--ros-args", "-r", "__ns:=/dom"],
                             env=env, stderr=subprocess.PIPE, text=True)
@@ -210,7 +209,7 @@ def test_ros_domain_id_is_honoured_and_checked():
             return e.kind == "publication" and e.ros_name == "/dom/reward"
         with ros_agent.Agent(domain_id=domain) as same:
             same.wait_for_endpoint(publishes_reward, timeout=10)
-        with ros_agent.Agent(domain_id=domain + 100) as other:
+        with ros_agent.Agent(domain_id=node_suite.other_domain(domain)) as other:
             time.sleep(1.5)
             assert not any(publishes_reward(e) for e in other.discovered_topics())
     finally:
@@ -223,7 +222,7 @@ def test_ros_domain_id_is_honoured_and_checked():
 
 
 def test_remaps_and_node_name_apply_to_a_running_node():
-    domain = random.randint(1, 200)
+    domain = node_suite.random_domain()
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
     node = subprocess.Popen([str(bin_dir() / "sim_node"), "--ros-args", "-r", "__ns:=/rm",
                              "-r", "__node:=arm_sim", "-r", "joint_states:=arm_states",
@@ -260,7 +259,7 @@ class BareNodes:
                  per_node: dict[str, tuple[str, ...]] | None = None):
         self.namespace, self.kinds, self.ros_args = namespace, kinds, ros_args
         self.per_node = per_node or {}
-        self.domain = random.randint(1, 200)
+        self.domain = node_suite.random_domain()
         self.procs: list[subprocess.Popen] = []
         self.errs: list[str] = []
 
@@ -364,7 +363,7 @@ def test_reset_without_a_sim_fails_with_a_reason_instead_of_hanging():
 
 def test_demo_plays_the_expert_over_ros_identically_to_in_process():
     result = subprocess.run([composuite(), "demo", "--episodes", "1", "--seed", "0", "--json"],
-                            env=dict(os.environ, ROS_DOMAIN_ID=str(random.randint(1, 200))),
+                            env=dict(os.environ, ROS_DOMAIN_ID=str(node_suite.random_domain())),
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     import json
