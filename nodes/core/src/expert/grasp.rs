@@ -48,6 +48,14 @@ const DUMBBELL_STEEP_PAD_BELOW_ORIGIN: f64 = 0.025;
 /// gripper base (a Ø 5.8 cm × 10 cm cylinder along the closing axis, 6 cm behind the pads)
 /// clears bin 1's floor while the pads sit at the disc's height.
 const PLATE_PITCH: f64 = 0.38;
+/// The plate's steeper rim grasp ([`PlatePitch::Steep`]): the approach axis this far below
+/// horizontal (rad). The wrist turns less from pointing down to reach it, and behind the door
+/// the Panda reaches it without turning its forearm half round (0.4 rad of joint travel
+/// against 2.5). The pads then grip the disc by its edges only, and the plate slips when the
+/// gripper turns a lot with it held (into the shelf) — see `PlannedExpert::plate_pitch`.
+/// Beyond ~0.62 rad the lower fingertip, lower by sin(pitch) × its length, meets the floor
+/// unless the pads aim higher (`PLATE_STEEP_GRASP_RAISE` in `planned/approach.rs`).
+const PLATE_STEEP_PITCH: f64 = 0.65;
 /// The plate's rim grasp: roll about the approach axis (rad). The disc is 1.40 cm thick and
 /// the pads close to 1.41 cm at most, so square-on pads never squeeze it; rolled, the pads'
 /// edges bite the disc's faces across a wider span ((t + w·sin β)/cos β ≈ 1.5 cm).
@@ -111,6 +119,8 @@ pub(super) struct GraspInput<'a> {
     pub tilt: f64,
     /// Which way side grasps should point.
     pub headings: Headings,
+    /// How steeply the plate's rim grasp points down.
+    pub plate_pitch: PlatePitch,
 }
 
 /// The grasps of the object in `input`, the planner's preferred one first.
@@ -130,7 +140,29 @@ pub(super) fn grasp_candidates(input: &GraspInput) -> Vec<Grasp> {
             let steep = input.headings == Headings::AroundSteep;
             dumbbell_grasps_towards(input.position, h, steep)
         }),
-        Object::Plate => side_grasps(input.headings, |h| plate_grasps_towards(input.position, h)),
+        Object::Plate => side_grasps(input.headings, |h| {
+            plate_grasps_towards(input.position, h, input.plate_pitch)
+        }),
+    }
+}
+
+/// How far below horizontal the plate's rim grasp points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum PlatePitch {
+    /// [`PLATE_PITCH`]: the scripted expert's, and the planned expert's where the held plate
+    /// turns in the hand.
+    Level,
+    /// [`PLATE_STEEP_PITCH`].
+    Steep,
+}
+
+impl PlatePitch {
+    /// The approach axis's angle below horizontal (rad).
+    pub(super) fn angle(self) -> f64 {
+        match self {
+            PlatePitch::Level => PLATE_PITCH,
+            PlatePitch::Steep => PLATE_STEEP_PITCH,
+        }
     }
 }
 
@@ -228,9 +260,9 @@ fn dumbbell_grasps_towards(position: Point3<f64>, h: Vector3<f64>, steep: bool) 
 }
 
 /// The plate by its rim, from the side: the fingers close (nearly) vertically on the disc;
-/// pointing along `h`, both ways round, rolled either way.
-fn plate_grasps_towards(position: Point3<f64>, h: Vector3<f64>) -> Vec<Grasp> {
-    let (pitch, roll) = (PLATE_PITCH, PLATE_ROLL);
+/// pointing along `h` and leaning down by `pitch`, both ways round, rolled either way.
+fn plate_grasps_towards(position: Point3<f64>, h: Vector3<f64>, pitch: PlatePitch) -> Vec<Grasp> {
+    let (pitch, roll) = (pitch.angle(), PLATE_ROLL);
     let approach = (h * pitch.cos() - Vector3::z() * pitch.sin()).normalize();
     let up = (h * pitch.sin() + Vector3::z() * pitch.cos()).normalize();
     let axis = Unit::new_normalize(approach);
@@ -411,6 +443,7 @@ mod tests {
                 rotation: UnitQuaternion::identity(),
                 tilt: 0.0,
                 headings: Headings::TowardsBin2,
+                plate_pitch: PlatePitch::Level,
             };
             let grasps = grasp_candidates(&input);
             assert_eq!(grasps.len(), 1);
@@ -501,6 +534,46 @@ mod tests {
                 .fold(f64::NAN, f64::max)
         };
         assert!(steepest(true) > steepest(false) + 0.05);
+    }
+
+    /// The plate's rim grasps at either pitch: the gripper points along the heading, leaning
+    /// down by the pitch, the pads 1.2 cm inside the rim at the disc's height, the fingers
+    /// closing across the disc — square to the approach, within the roll of the approach's
+    /// vertical plane — both ways round and rolled either way.
+    #[test]
+    fn the_plate_rim_grasps_lean_by_their_pitch() {
+        let position = Point3::new(0.15, -0.25, 0.84);
+        let radius = object_geometry(Object::Plate).horizontal_radius;
+        for pitch in [PlatePitch::Level, PlatePitch::Steep] {
+            for h in Headings::AroundSteep.directions() {
+                let grasps = plate_grasps_towards(position, h, pitch);
+                assert_eq!(grasps.len(), 4);
+                for grasp in &grasps {
+                    let approach = grasp.orientation * Vector3::z();
+                    // The grip site's frame is the gripper's turned a quarter about z.
+                    let closing = grasp.orientation
+                        * UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2)
+                        * Vector3::y();
+                    assert!(
+                        (-approach.z.asin() - pitch.angle()).abs() < 1e-9,
+                        "{pitch:?}"
+                    );
+                    assert!((approach.xy().normalize() - h.xy()).norm() < 1e-9);
+                    assert!(approach.dot(&closing).abs() < 1e-9);
+                    // Out of the approach's vertical plane by the roll, no more.
+                    let out_of_plane = closing.dot(&h.cross(&Vector3::z())).abs();
+                    assert!(
+                        (out_of_plane - PLATE_ROLL.sin()).abs() < 1e-9,
+                        "{out_of_plane}"
+                    );
+                    let inside = (position.coords - grasp.pad).xy().dot(&h.xy());
+                    assert!((inside - (radius - PLATE_PAD_INSIDE_RIM)).abs() < 1e-9);
+                    assert!((grasp.pad.z - position.z - PLATE_DISC_Z).abs() < 1e-12);
+                    assert_eq!(grasp.approach, h);
+                }
+            }
+        }
+        assert!(PlatePitch::Steep.angle() > PlatePitch::Level.angle() + 0.2);
     }
 
     /// The second choice of headings goes all round, every 15°, without the first choice's.

@@ -7,7 +7,7 @@
 use nalgebra::{Point2, Point3, UnitQuaternion, Vector3};
 
 use super::clearance::Clearance;
-use super::grasp::{Grasp, GraspInput, Headings, grasp_candidates};
+use super::grasp::{Grasp, GraspInput, Headings, PlatePitch, grasp_candidates};
 use super::motion::pad_ik_solutions;
 use super::nudge::pushers;
 use crate::arena::goal_position;
@@ -47,6 +47,7 @@ fn behind_the_wall_the_fingers_reach_behind_the_object_where_no_side_grasp_does(
                     rotation: UnitQuaternion::identity(),
                     tilt: 0.0,
                     headings: Headings::TowardsBin2,
+                    plate_pitch: PlatePitch::Level,
                 };
                 let towards_bin2: Vec<Grasp> = grasp_candidates(&input)
                     .into_iter()

@@ -13,7 +13,7 @@ use crate::physics::{ARM_DOF, RobotModel, robot_model};
 
 use super::clearance::{Clearance, MIN_CLEARANCE, best_clear};
 use super::grasp::{
-    Grasp, GraspInput, Headings, closed, grasp_candidates, gripper_closing_axis,
+    Grasp, GraspInput, Headings, PlatePitch, closed, grasp_candidates, gripper_closing_axis,
     gripper_orientation, open,
 };
 use super::motion::{
@@ -459,6 +459,7 @@ impl Expert {
                         rotation: object_rotation,
                         tilt,
                         headings,
+                        plate_pitch: PlatePitch::Level,
                     })
                 };
                 if candidates.is_empty() {
