@@ -40,6 +40,12 @@ const SHORT_BACKOFFS: [f64; 2] = [0.05, 0.03];
 /// IK solutions at the grasp tried per candidate where the pre-grasp is found from the grasp.
 const GRASP_FIRST_SOLUTIONS: usize = 8;
 
+/// What a grasp's lean `tilt` (rad) adds to its joint travel when grasps are compared: a
+/// leaning grasp only where no upright one will do.
+fn leaning(tilt: f64) -> f64 {
+    if tilt > 0.0 { LEANING } else { 0.0 }
+}
+
 /// A way into a grasp: what it costs (joint travel to the pre-grasp, more for a leaning top
 /// grasp), the pre-grasp's joints, the grasp, and the straight descent into it.
 pub(super) struct ApproachOption {
@@ -47,6 +53,19 @@ pub(super) struct ApproachOption {
     pub(super) pre: Joints,
     pub(super) grasp: Grasp,
     pub(super) descent: Vec<Joints>,
+}
+
+impl ApproachOption {
+    /// The way from `q` to the pre-grasp `pre` of `grasp` (its top grasp leaning by `tilt`)
+    /// and down `descent`, costed.
+    fn from(q: &Joints, tilt: f64, pre: Joints, grasp: Grasp, descent: Vec<Joints>) -> Self {
+        ApproachOption {
+            cost: joint_distance(q, &pre) + leaning(tilt),
+            pre,
+            grasp,
+            descent,
+        }
+    }
 }
 
 impl PlannedExpert {
@@ -71,15 +90,8 @@ impl PlannedExpert {
             &Isometry3::from_parts(object.coords.into(), rotation),
         );
         let side = matches!(self.task.object, Object::Plate | Object::Dumbbell);
-        let mut first = self.approach_options(
-            env,
-            q,
-            object,
-            rotation,
-            &around,
-            Headings::TowardsBin2,
-            None,
-        );
+        let mut first =
+            self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
         if self.pushing() {
             let any_clear;
             (first, any_clear) = self.clear_slides_first(env, first);
@@ -93,7 +105,6 @@ impl PlannedExpert {
                     rotation,
                     &around,
                     Headings::Around,
-                    None,
                 ));
                 first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
                 first = self.clear_slides_first(env, first).0;
@@ -107,7 +118,7 @@ impl PlannedExpert {
         }
         let others = self.pushes_clear_first(
             env,
-            self.approach_options(env, q, object, rotation, &around, Headings::Around, None),
+            self.approach_options(env, q, object, rotation, &around, Headings::Around),
         );
         if let Some(found) = self.plan_first(env, &around, q, others) {
             return Some(found);
@@ -115,15 +126,7 @@ impl PlannedExpert {
         if self.task.object == Object::Dumbbell {
             let steep = self.pushes_clear_first(
                 env,
-                self.approach_options(
-                    env,
-                    q,
-                    object,
-                    rotation,
-                    &around,
-                    Headings::AroundSteep,
-                    None,
-                ),
+                self.approach_options(env, q, object, rotation, &around, Headings::AroundSteep),
             );
             if let Some(found) = self.plan_first(env, &around, q, steep) {
                 return Some(found);
@@ -134,24 +137,7 @@ impl PlannedExpert {
         // branch whose descent runs the forearm into a wall, and behind a wall the full
         // stretch back may itself reach into it (behind the object wall the IIWA's dumbbell:
         // no way in on 6 of seeds 0–9 at 8 cm, one on every seed at 3 cm).
-        for backoff in SHORT_BACKOFFS {
-            let mut last = Vec::new();
-            let mut all = vec![Headings::TowardsBin2, Headings::Around];
-            if self.task.object == Object::Dumbbell {
-                all.push(Headings::AroundSteep);
-            }
-            for headings in all {
-                last.extend(self.approach_options(
-                    env,
-                    q,
-                    object,
-                    rotation,
-                    &around,
-                    headings,
-                    Some(backoff),
-                ));
-            }
-            last.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        for last in self.options_from_the_grasp(env, q, object, rotation, &around) {
             let last = self.pushes_clear_first(env, last);
             if let Some(found) = self.plan_first(env, &around, q, last) {
                 return Some(found);
@@ -161,10 +147,8 @@ impl PlannedExpert {
     }
 
     /// The ways into a grasp of the object at `object` (side grasps pointing along
-    /// `headings`) whose pre-grasp and descent keep clear, cheapest first. The pre-grasp is
-    /// solved for first and the descent drawn from it, or, `from_the_grasp` with a last
-    /// stretch (m), the arm's pose at the grasp first and the descent drawn back from it.
-    #[allow(clippy::too_many_arguments)]
+    /// `headings`) whose pre-grasp and descent keep clear, cheapest first: the pre-grasp
+    /// solved for first, the descent drawn from it.
     fn approach_options(
         &self,
         env: &Env,
@@ -173,9 +157,89 @@ impl PlannedExpert {
         rotation: UnitQuaternion<f64>,
         around: &Clearance,
         headings: Headings,
-        from_the_grasp: Option<f64>,
     ) -> Vec<ApproachOption> {
         let model = env.world().model;
+        let mut options = Vec::new();
+        for (tilt, grasp) in self.grasp_choices(model, q, object, rotation, headings) {
+            let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
+            solutions.truncate(4);
+            for pre in solutions {
+                let (pre, gap) = quicker(model, around, &q, pre, grasp.pre(), grasp.orientation);
+                if gap < LEAST_END_CLEARANCE {
+                    continue;
+                }
+                let Some(descent) = line(model, pre, grasp.pre(), grasp.pad, grasp.orientation)
+                else {
+                    continue;
+                };
+                if !self.clear_descent(model, &descent) {
+                    continue;
+                }
+                options.push(ApproachOption::from(&q, tilt, pre, grasp, descent));
+            }
+        }
+        options.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        options
+    }
+
+    /// The ways into a side grasp on every heading with the arm's pose at the grasp solved for
+    /// first and the descent drawn back from it: one list for each of [`SHORT_BACKOFFS`]
+    /// (the same poses at the grasp, a shorter stretch back), each cheapest first.
+    fn options_from_the_grasp(
+        &self,
+        env: &Env,
+        q: Joints,
+        object: Point3<f64>,
+        rotation: UnitQuaternion<f64>,
+        around: &Clearance,
+    ) -> [Vec<ApproachOption>; SHORT_BACKOFFS.len()] {
+        let model = env.world().model;
+        let mut all = vec![Headings::TowardsBin2, Headings::Around];
+        if self.task.object == Object::Dumbbell {
+            all.push(Headings::AroundSteep);
+        }
+        let mut by_backoff: [Vec<ApproachOption>; SHORT_BACKOFFS.len()] = Default::default();
+        for headings in all {
+            for (tilt, grasp) in self.grasp_choices(model, q, object, rotation, headings) {
+                let mut solutions = pad_ik_solutions(model, &q, grasp.pad, grasp.orientation);
+                solutions.truncate(GRASP_FIRST_SOLUTIONS);
+                for at_grasp in solutions {
+                    for (options, backoff) in by_backoff.iter_mut().zip(SHORT_BACKOFFS) {
+                        let grasp = Grasp { backoff, ..grasp };
+                        let Some(mut descent) =
+                            line(model, at_grasp, grasp.pad, grasp.pre(), grasp.orientation)
+                        else {
+                            continue;
+                        };
+                        descent.reverse();
+                        let pre = descent[0];
+                        if around.at(model, &pre) < LEAST_END_CLEARANCE
+                            || !self.clear_descent(model, &descent)
+                        {
+                            continue;
+                        }
+                        options.push(ApproachOption::from(&q, tilt, pre, grasp, descent));
+                    }
+                }
+            }
+        }
+        for options in &mut by_backoff {
+            options.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        }
+        by_backoff
+    }
+
+    /// The grasps of the object at `object` (side grasps pointing along `headings`), each
+    /// with the lean of its top grasp's approach (0 for side grasps), as the planned expert
+    /// takes them: the plate's pads raised, a top grasp's last stretch short.
+    fn grasp_choices(
+        &self,
+        model: &RobotModel,
+        q: Joints,
+        object: Point3<f64>,
+        rotation: UnitQuaternion<f64>,
+        headings: Headings,
+    ) -> Vec<(f64, Grasp)> {
         let pitch = self.plate_pitch();
         // Top grasps also leaning towards the robot: over a wall near it, a vertical gripper
         // hangs the Panda's forearm on the wall.
@@ -196,81 +260,31 @@ impl PlannedExpert {
             .filter(move |g| tilt == 0.0 || g.top_down)
             .map(move |g| (tilt, g))
         });
-        let mut options = Vec::new();
-        for (tilt, grasp) in candidates {
-            // The planned approach keeps clear of the object, so the straight stretch into a
-            // top grasp can be short.
-            let grasp = Grasp {
-                pad: if self.task.object == Object::Plate {
-                    grasp.pad
-                        + Vector3::z()
-                            * match pitch {
-                                PlatePitch::Level => PLATE_GRASP_RAISE,
-                                PlatePitch::Steep => PLATE_STEEP_GRASP_RAISE,
-                            }
-                } else {
-                    grasp.pad
-                },
-                backoff: if grasp.top_down {
-                    grasp.backoff.min(TOP_BACKOFF)
-                } else {
-                    grasp.backoff
-                },
-                ..grasp
-            };
-            if let Some(backoff) = from_the_grasp {
-                let grasp = Grasp { backoff, ..grasp };
-                // The arm's pose at the grasp first, the descent drawn back from it.
-                let mut solutions = pad_ik_solutions(model, &q, grasp.pad, grasp.orientation);
-                solutions.truncate(GRASP_FIRST_SOLUTIONS);
-                for at_grasp in solutions {
-                    let Some(mut descent) =
-                        line(model, at_grasp, grasp.pad, grasp.pre(), grasp.orientation)
-                    else {
-                        continue;
-                    };
-                    descent.reverse();
-                    let pre = descent[0];
-                    if around.at(model, &pre) < LEAST_END_CLEARANCE
-                        || !self.clear_descent(model, &descent)
-                    {
-                        continue;
-                    }
-                    options.push(ApproachOption {
-                        cost: joint_distance(&q, &pre) + if tilt > 0.0 { LEANING } else { 0.0 },
-                        pre,
-                        grasp,
-                        descent,
-                    });
-                }
-                continue;
-            }
-            let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
-            solutions.truncate(4);
-            for pre in solutions {
-                let (pre, gap) = quicker(model, around, &q, pre, grasp.pre(), grasp.orientation);
-                if gap < LEAST_END_CLEARANCE {
-                    continue;
-                }
-                let Some(descent) = line(model, pre, grasp.pre(), grasp.pad, grasp.orientation)
-                else {
-                    continue;
+        candidates
+            .map(|(tilt, grasp)| {
+                // The planned approach keeps clear of the object, so the straight stretch into
+                // a top grasp can be short.
+                let grasp = Grasp {
+                    pad: if self.task.object == Object::Plate {
+                        grasp.pad
+                            + Vector3::z()
+                                * match pitch {
+                                    PlatePitch::Level => PLATE_GRASP_RAISE,
+                                    PlatePitch::Steep => PLATE_STEEP_GRASP_RAISE,
+                                }
+                    } else {
+                        grasp.pad
+                    },
+                    backoff: if grasp.top_down {
+                        grasp.backoff.min(TOP_BACKOFF)
+                    } else {
+                        grasp.backoff
+                    },
+                    ..grasp
                 };
-                if !self.clear_descent(model, &descent) {
-                    continue;
-                }
-                // A leaning grasp only where no upright one will do.
-                let cost = joint_distance(&q, &pre) + if tilt > 0.0 { LEANING } else { 0.0 };
-                options.push(ApproachOption {
-                    cost,
-                    pre,
-                    grasp,
-                    descent,
-                });
-            }
-        }
-        options.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-        options
+                (tilt, grasp)
+            })
+            .collect()
     }
 
     /// Whether a descent into a grasp stays within the joints' limits with the arm clear of
