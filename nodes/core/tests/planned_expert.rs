@@ -136,6 +136,17 @@ fn the_planned_expert_finds_a_way_in_from_the_grasp_behind_the_object_wall() {
 
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
+/// Revision 11: a push whose every grasp's lines come close to the goal wall takes the grasp
+/// whose lines come least close (before, the cheapest: its hand ran 4 cm into the wall and the
+/// push stalled 6 cm short; 4 of 10 seeds then, 10 of 10 now); a carry ends clear of the goal
+/// wall's top where that costs little more (before, the Gen3's forearm stalled on it and the
+/// dumbbell fell onto the trash can's rim: 5 of 10 then, 10 of 10 now).
+#[test]
+fn the_planned_expert_keeps_its_pushes_and_carries_off_the_goal_wall() {
+    assert_solves("Panda/dumbbell/goal_wall/push", &[0]);
+    assert_solves("Gen3/dumbbell/goal_wall/trash_can", &[0]);
+}
+
 #[test]
 fn an_expert_episode_replays_from_its_stored_actions() {
     let task: TaskSpec = "Gen3/hollow_box/no_obstacle/pick_place".parse().unwrap();
@@ -171,7 +182,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 /// over the trash can past the goal wall (400), and a push that turns the gripper where the
 /// straight line is lost (300), a dumbbell behind the object wall reached only from the arm's
 /// pose at the grasp (300), every action's 8 numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (10, 0x894b818591b439e4);
+const REVISION_DIGEST: (u32, u64) = (11, 0xca07becfdf5d5505);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {

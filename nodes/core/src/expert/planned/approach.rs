@@ -68,6 +68,22 @@ impl ApproachOption {
     }
 }
 
+/// `options` (cheapest first) with only the first of each grasp (the same orientation of the
+/// gripper): its cheapest way in.
+fn cheapest_per_grasp(mut options: Vec<ApproachOption>) -> Vec<ApproachOption> {
+    let mut seen: Vec<UnitQuaternion<f64>> = Vec::new();
+    options.retain(|option| {
+        let new = seen
+            .iter()
+            .all(|r| r.angle_to(&option.grasp.orientation) > 1e-3);
+        if new {
+            seen.push(option.grasp.orientation);
+        }
+        new
+    });
+    options
+}
+
 impl PlannedExpert {
     /// A free path to a pre-grasp, the grasp, and the straight descent into it: of the
     /// candidates the arm reaches clear of the arena and the object, the one with the least
@@ -94,10 +110,13 @@ impl PlannedExpert {
             self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
         if self.pushing() {
             let any_clear;
-            (first, any_clear) = self.clear_slides_first(env, first);
+            (first, any_clear) = self.clear_slides_first(env, first, PLANNED_OPTIONS);
             if side && !any_clear {
                 // A push whose lines would drag the arm along the arena from every
-                // first-choice grasp: the other headings too, those with clear lines first.
+                // first-choice grasp: the other headings too, each grasp by its cheapest way
+                // in and every one looked at, those with clear lines first (the 64 push tasks
+                // on seeds 0-9, with lines weighed at 20 rad/m: 576 episodes against 564 with
+                // only the cheapest eight looked at).
                 first.extend(self.approach_options(
                     env,
                     q,
@@ -107,7 +126,9 @@ impl PlannedExpert {
                     Headings::Around,
                 ));
                 first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-                first = self.clear_slides_first(env, first).0;
+                first = self
+                    .clear_slides_first(env, cheapest_per_grasp(first), usize::MAX)
+                    .0;
             }
         }
         if let Some(found) = self.plan_first(env, &around, q, first) {
