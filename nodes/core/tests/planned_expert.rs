@@ -134,8 +134,6 @@ fn the_planned_expert_finds_a_way_in_from_the_grasp_behind_the_object_wall() {
     assert_solves("IIWA/dumbbell/object_wall/pick_place", &[0]);
 }
 
-/// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
-/// into a fresh environment they give the same observations, rewards and success, bit for bit.
 /// Revision 11: a push whose every grasp's lines come close to the goal wall takes the grasp
 /// whose lines come least close (before, the cheapest: its hand ran 4 cm into the wall and the
 /// push stalled 6 cm short; 4 of 10 seeds then, 10 of 10 now); a carry ends clear of the goal
@@ -147,6 +145,8 @@ fn the_planned_expert_keeps_its_pushes_and_carries_off_the_goal_wall() {
     assert_solves("Gen3/dumbbell/goal_wall/trash_can", &[0]);
 }
 
+/// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
+/// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
 fn an_expert_episode_replays_from_its_stored_actions() {
     let task: TaskSpec = "Gen3/hollow_box/no_obstacle/pick_place".parse().unwrap();

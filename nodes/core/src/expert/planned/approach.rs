@@ -91,9 +91,11 @@ impl PlannedExpert {
     /// push start well from them); only where none has a path, every other heading; for the
     /// dumbbell, every heading pitched steeper (behind the door the hand must come down
     /// from above the posts); for both, last, every heading from the arm's pose at the grasp
-    /// with a shorter last stretch ([`SHORT_BACKOFFS`]). For a push, grasps from which its lines keep clear go first in
-    /// each of these ([`Self::clear_slides_first`]); for the plate and the dumbbell, where no
-    /// first-choice heading gives such lines, the first two are weighed together.
+    /// with a shorter last stretch ([`SHORT_BACKOFFS`]). For a push, grasps from which its
+    /// lines keep clear go first in each of these, the rest by how close their lines come
+    /// ([`Self::clear_slides_first`]); for the plate and the dumbbell, where no first-choice
+    /// heading gives clear lines, every grasp of the first two is weighed, by its cheapest way
+    /// in.
     pub(super) fn plan_approach(
         &mut self,
         env: &Env,
