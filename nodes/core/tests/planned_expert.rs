@@ -145,6 +145,17 @@ fn the_planned_expert_keeps_its_pushes_and_carries_off_the_goal_wall() {
     assert_solves("Gen3/dumbbell/goal_wall/trash_can", &[0]);
 }
 
+/// Revision 12: where no way in keeps the arm's descent clear of the arena, the last search
+/// from the grasp takes one that comes no closer than a pre-grasp may (behind the door the
+/// IIWA found no way in at all on seed 7: 7 of 10 then, 9 of 10 now); where no way into the
+/// shelf keeps the held dumbbell's spheres that clear, both ways again 1 cm closer (past the
+/// goal wall the IIWA lifted the dumbbell and held it on seed 1: 9 of 10 then, 10 of 10 now).
+#[test]
+fn the_planned_expert_comes_closer_where_nothing_else_is_left() {
+    assert_solves("IIWA/dumbbell/object_door/trash_can", &[7]);
+    assert_solves("IIWA/dumbbell/goal_wall/shelf", &[1]);
+}
+
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
@@ -182,7 +193,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 /// over the trash can past the goal wall (400), and a push that turns the gripper where the
 /// straight line is lost (300), a dumbbell behind the object wall reached only from the arm's
 /// pose at the grasp (300), every action's 8 numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (11, 0xca07becfdf5d5505);
+const REVISION_DIGEST: (u32, u64) = (12, 0xca07becfdf5d5505);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {
