@@ -156,6 +156,15 @@ fn the_planned_expert_comes_closer_where_nothing_else_is_left() {
     assert_solves("IIWA/dumbbell/goal_wall/shelf", &[1]);
 }
 
+/// Revision 13: where the IK loses the line down into bin 2 past the goal wall, the dumbbell
+/// is lowered only to just under the bin's line, or part of the way, before it is let go
+/// (before, it was let go 9 cm above and bounced out; the Gen3 solved 1 of 10 seeds then, 3
+/// now).
+#[test]
+fn the_planned_expert_lowers_what_it_can_into_bin_2() {
+    assert_solves("Gen3/dumbbell/goal_wall/pick_place", &[0]);
+}
+
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
@@ -193,7 +202,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 /// over the trash can past the goal wall (400), and a push that turns the gripper where the
 /// straight line is lost (300), a dumbbell behind the object wall reached only from the arm's
 /// pose at the grasp (300), every action's 8 numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (12, 0xca07becfdf5d5505);
+const REVISION_DIGEST: (u32, u64) = (13, 0xca07becfdf5d5505);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {
