@@ -248,12 +248,10 @@ impl PlannedExpert {
                         if around.at(model, &pre) < LEAST_END_CLEARANCE {
                             continue;
                         }
-                        let options = if self.clear_descent(model, &descent) {
-                            &mut *clear
-                        } else if self.descent_within(model, &descent, LEAST_END_CLEARANCE) {
-                            &mut *close
-                        } else {
-                            continue;
+                        let options = match self.descent_gap(model, &descent) {
+                            Some(gap) if gap >= 0.0 => &mut *clear,
+                            Some(gap) if gap >= LEAST_END_CLEARANCE => &mut *close,
+                            _ => continue,
                         };
                         options.push(ApproachOption::from(&q, tilt, pre, grasp, descent));
                     }
@@ -327,16 +325,19 @@ impl PlannedExpert {
     /// Whether a descent into a grasp stays within the joints' limits with the arm clear of
     /// the arena (the fingers left out: they come close to the floor on purpose).
     fn clear_descent(&self, model: &RobotModel, descent: &[Joints]) -> bool {
-        self.descent_within(model, descent, 0.0)
+        self.descent_gap(model, descent)
+            .is_some_and(|gap| gap >= 0.0)
     }
 
-    /// Whether a descent stays within the joints' limits with the arm (the fingers left out)
-    /// no closer to the arena than `least` (m).
-    fn descent_within(&self, model: &RobotModel, descent: &[Joints], least: f64) -> bool {
-        descent.iter().all(|c| off_the_limits(model, c))
-            && descent
+    /// The smallest gap (m) between the arena and the arm (the fingers left out) along a
+    /// descent, `None` where the descent leaves the joints' limit margin.
+    fn descent_gap(&self, model: &RobotModel, descent: &[Joints]) -> Option<f64> {
+        descent.iter().all(|c| off_the_limits(model, c)).then(|| {
+            descent
                 .iter()
-                .all(|c| self.clearance.without_fingers(model, c) >= least)
+                .map(|c| self.clearance.without_fingers(model, c))
+                .fold(f64::INFINITY, f64::min)
+        })
     }
 
     /// How steeply the plate's rim grasp points down. Steep where the plate is only carried
