@@ -165,6 +165,15 @@ fn the_planned_expert_lowers_what_it_can_into_bin_2() {
     assert_solves("Gen3/dumbbell/goal_wall/pick_place", &[0]);
 }
 
+/// Revision 14: the dumbbell may go into the shelf turned half a turn about the gripper's axis
+/// (held the same way, upside down), where the arm reaches that with less joint travel: behind
+/// the object wall the Jaco solved 5 of 10 seeds before, 9 now; the Gen3 3, now 6.
+#[test]
+fn the_planned_expert_turns_the_dumbbell_over_into_the_shelf() {
+    assert_solves("Jaco/dumbbell/object_wall/shelf", &[1]);
+    assert_solves("Gen3/dumbbell/object_wall/shelf", &[4]);
+}
+
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
@@ -202,7 +211,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 /// over the trash can past the goal wall (400), and a push that turns the gripper where the
 /// straight line is lost (300), a dumbbell behind the object wall reached only from the arm's
 /// pose at the grasp (300), every action's 8 numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (13, 0xca07becfdf5d5505);
+const REVISION_DIGEST: (u32, u64) = (14, 0xca07becfdf5d5505);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {
