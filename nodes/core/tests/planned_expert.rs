@@ -182,6 +182,15 @@ fn the_planned_expert_takes_the_plate_steeply_past_the_goal_wall() {
     assert_solves("Panda/plate/goal_wall/shelf", &[2]);
 }
 
+/// Revision 16: the dumbbell is let go 2 cm short of the trash can's centre, back along the way
+/// the gripper points. Hanging by its upper disc on the opened fingers, from the centre it was
+/// dragged towards the can's near wall as they backed out and wedged there (the Panda's past
+/// the goal wall: 4 of 10 seeds before, 10 now).
+#[test]
+fn the_planned_expert_lets_the_dumbbell_go_short_of_the_trash_cans_centre() {
+    assert_solves("Panda/dumbbell/goal_wall/trash_can", &[3]);
+}
+
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
@@ -219,7 +228,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 /// over the trash can past the goal wall (400), and a push that turns the gripper where the
 /// straight line is lost (300), a dumbbell behind the object wall reached only from the arm's
 /// pose at the grasp (300), every action's 8 numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (15, 0xca07becfdf5d5505);
+const REVISION_DIGEST: (u32, u64) = (16, 0x5815be61963822e6);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {
