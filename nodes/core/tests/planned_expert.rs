@@ -191,6 +191,14 @@ fn the_planned_expert_lets_the_dumbbell_go_short_of_the_trash_cans_centre() {
     assert_solves("Panda/dumbbell/goal_wall/trash_can", &[3]);
 }
 
+/// Revision 17: where the object lies in bin 2 but the gripper, after letting go and backing
+/// away, is out of the 7.75 cm that pick-place's success asks, the pads go back over it (the
+/// Gen3's plate past the goal wall slipped out of the steep grasp on the way down, seed 2).
+#[test]
+fn the_planned_expert_goes_back_over_the_object_it_left_in_bin_2() {
+    assert_solves("Gen3/plate/goal_wall/pick_place", &[2]);
+}
+
 /// An episode's stored actions are the reference's 8 numbers, each in [−1, 1]; played again
 /// into a fresh environment they give the same observations, rewards and success, bit for bit.
 #[test]
@@ -228,7 +236,7 @@ fn an_expert_episode_replays_from_its_stored_actions() {
 /// over the trash can past the goal wall (400), and a push that turns the gripper where the
 /// straight line is lost (300), a dumbbell behind the object wall reached only from the arm's
 /// pose at the grasp (300), every action's 8 numbers hashed by their bits.
-const REVISION_DIGEST: (u32, u64) = (16, 0x5815be61963822e6);
+const REVISION_DIGEST: (u32, u64) = (17, 0x5815be61963822e6);
 
 /// FNV-1a over the actions' bits of the first `steps` steps of `name` from `seed`.
 fn action_digest(name: &str, seed: u64, steps: usize, digest: &mut u64) {

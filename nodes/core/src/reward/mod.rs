@@ -13,6 +13,8 @@ mod push;
 mod shelf;
 mod trash_can;
 
+pub(crate) use pick_place::in_bin2;
+
 use nalgebra::{Point3, Vector3};
 
 use crate::axes::{Object, Objective};

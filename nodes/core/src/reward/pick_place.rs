@@ -5,6 +5,8 @@ use super::{
     REACH_GAIN, StageSpec, StagedReward, WorldSnapshot, closeness, reach_distance,
     strictly_between, xy_distance,
 };
+use nalgebra::Point3;
+
 use crate::arena::{BIN2_FLOOR_HALF, objective_arena};
 use crate::axes::Objective;
 
@@ -41,14 +43,22 @@ const LIFT_GAIN: f64 = 5.0;
 const HOVER_GAIN: f64 = 2.0;
 const DROP_GAIN: f64 = 5.0;
 
+/// Whether an object whose origin is at `p` is in bin 2 as PickPlace counts it: inside its
+/// floor's footprint and below its walls' tops (strictly).
+pub(crate) fn in_bin2(p: &Point3<f64>) -> bool {
+    let bin = objective_arena(Objective::PickPlace).bin2_position;
+    let [half_x, half_y, _] = BIN2_FLOOR_HALF;
+    strictly_between(p.x, bin[0] - half_x, bin[0] + half_x)
+        && strictly_between(p.y, bin[1] - half_y, bin[1] + half_y)
+        && strictly_between(p.z, bin[2], bin[2] + IN_BIN_HEIGHT)
+}
+
 pub(super) fn staged_reward(s: &WorldSnapshot) -> StagedReward {
     let bin = objective_arena(Objective::PickPlace).bin2_position;
     let [half_x, half_y, _] = BIN2_FLOOR_HALF;
     let p = s.object_position;
 
-    let in_bin = strictly_between(p.x, bin[0] - half_x, bin[0] + half_x)
-        && strictly_between(p.y, bin[1] - half_y, bin[1] + half_y)
-        && strictly_between(p.z, bin[2], bin[2] + IN_BIN_HEIGHT);
+    let in_bin = in_bin2(&p);
     let d_reach = reach_distance(s);
     // The reference's "object in bin" flag includes the gripper-near test and gates stages.
     let success = in_bin && closeness(REACH_GAIN, d_reach) > SUCCESS_MIN_CLOSENESS;

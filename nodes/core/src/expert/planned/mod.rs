@@ -40,13 +40,14 @@ use crate::arena::{Primitive, arena_parts};
 use crate::axes::{Objective, Obstacle};
 use crate::env::{Action, Env};
 use crate::physics::{ARM_DOF, RobotModel, reference_command_for_gap, robot_model};
+use crate::reward::in_bin2;
 
 /// Which version of the expert's actions this is, on this physics: raised whenever a change
 /// to the expert (or to the physics under it) changes any action it takes. The offline
 /// datasets' noise table records it with each calibration and calibrates again where it
 /// differs; `tests/planned_expert.rs` pins a digest of a few episodes to it, so a change
 /// that moves the actions fails there until this is raised and the digest pinned anew.
-pub const PLANNED_EXPERT_REVISION: u32 = 16;
+pub const PLANNED_EXPERT_REVISION: u32 = 17;
 
 /// Control steps the gripper is given to open or close: its command moves 0.25 per step
 /// (8 steps end to end), and the fingers follow.
@@ -102,6 +103,8 @@ pub enum Stage {
     Release,
     /// Away from the object (up, back out of a side grasp or the shelf).
     Retreat,
+    /// Back over the object where it lies in bin 2 out of the gripper's reach (pick_place).
+    Return,
     /// Holding still until the episode ends.
     Done,
 }
@@ -344,10 +347,21 @@ impl PlannedExpert {
                     // The grasp failed: try again from here.
                     self.stage = Stage::Start;
                     self.hold(q);
+                } else if self.task.objective == Objective::PickPlace
+                    && !env.success_seen()
+                    && in_bin2(&object)
+                    && self.back_over_the_object(env, q, object)
+                {
+                    // In the bin, but the gripper too far from it to count.
+                    self.stage = Stage::Return;
                 } else {
                     self.hold(q);
                     self.stage = Stage::Done;
                 }
+            }
+            Stage::Return => {
+                self.hold(q);
+                self.stage = Stage::Done;
             }
             Stage::Done => {}
         }
