@@ -217,6 +217,13 @@ pub(super) fn pads_at(
     (pad.coords, grip.rotation)
 }
 
+/// The way a gripper at the grip-site `orientation` points, level: its approach axis with the
+/// vertical part dropped (not normalised: short where the gripper points nearly up or down).
+pub(super) fn level_pointing(orientation: &UnitQuaternion<f64>) -> Vector3<f64> {
+    let pointing = orientation * Vector3::z();
+    Vector3::new(pointing.x, pointing.y, 0.0)
+}
+
 /// Steps of [`least_travel`]'s descent.
 const LEAST_TRAVEL_STEPS: usize = 40;
 /// The largest joint change (rad) of one such step at first.

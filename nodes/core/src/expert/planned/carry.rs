@@ -7,7 +7,7 @@ use super::{LEAST_END_CLEARANCE, PlannedExpert, quicker, top_of};
 use crate::arena::{ROBOT_BASE_POSITION, TRASH_CAN, object_geometry};
 use crate::axes::{Object, Objective};
 use crate::env::Env;
-use crate::expert::motion::{pad_ik, pad_ik_solutions, pads_at};
+use crate::expert::motion::{level_pointing, pad_ik, pad_ik_solutions, pads_at};
 use crate::expert::track::{Joints, joint_distance};
 
 /// How far (m) the object's bottom is above the walls of what it is dropped into.
@@ -53,9 +53,7 @@ impl PlannedExpert {
         if self.task.objective != Objective::TrashCan || self.task.object != Object::Dumbbell {
             return Vector3::zeros();
         }
-        let pointing = orientation * Vector3::z();
-        let level = Vector3::new(pointing.x, pointing.y, 0.0);
-        match level.try_normalize(1e-6) {
+        match level_pointing(orientation).try_normalize(1e-6) {
             Some(level) => level * DUMBBELL_CAN_SHORT,
             None => Vector3::zeros(),
         }

@@ -31,7 +31,7 @@ use self::lines::line;
 use self::push::{PUSH_LIFT, PUSH_RISE_CHECK, PUSH_SIDE_TOP, SIDE_PUSH_LIFT};
 use super::clearance::{Clearance, MIN_CLEARANCE};
 use super::grasp::Grasp;
-use super::motion::{least_travel, pads_at};
+use super::motion::{least_travel, level_pointing, pads_at};
 use super::plan::{Space, path_length, plan};
 use super::track::{Joints, Leg, Tracker, joint_distance};
 use super::{EpisodeOutcome, run_with};
@@ -321,8 +321,7 @@ impl PlannedExpert {
                 // Out of the shelf backwards (its top block is above); from a side grasp back
                 // along the gripper, level (open fingers rising at once carry the dumbbell's
                 // upper disc with them); else straight up.
-                let pointing = orientation * Vector3::z();
-                let level = Vector3::new(pointing.x, pointing.y, 0.0);
+                let level = level_pointing(&orientation);
                 let backing_out = self.grasp.is_some_and(|g| !g.top_down) && level.norm() > 0.3;
                 let away = if self.task.objective == Objective::Shelf && self.grasp.is_some() {
                     -Vector3::y()

@@ -29,9 +29,10 @@ const SHALLOW_PARTS: [f64; 3] = [1.0, 0.66, 0.33];
 const BACK_OVER_IT: f64 = 0.045;
 
 impl PlannedExpert {
-    /// The pads in a straight line to just over the object (origin at `object`), the gripper
-    /// as it is: where the object fell into bin 2 before it was let go, or rolled away after,
-    /// and the retreat left the gripper out of its reach. Whether there is such a line.
+    /// The pads to just over the object (origin at `object`) where it fell into bin 2 before it
+    /// was let go, or rolled away after, and the retreat left the gripper out of its reach: a
+    /// straight line with the gripper as it is, else a planned path with the gripper as it is
+    /// or pointing straight down. Whether a way was found (and started).
     pub(super) fn back_over_the_object(
         &mut self,
         env: &Env,
