@@ -37,6 +37,10 @@ const PLATE_STEEP_GRASP_RAISE: f64 = 0.006;
 /// On the five side-grasp tasks with the most episodes finding no way in (seeds 0–9): 23 of 50
 /// without; from the grasp at 8 cm 24, 6 cm 25, 5 cm 30, 3 cm 32, 5 then 3 cm 36.
 const SHORT_BACKOFFS: [f64; 2] = [0.05, 0.03];
+/// How squarely a grasp from the goal's side points away from the goal (out from behind the
+/// door, [`PlannedExpert::grasp_from_the_goal_side`]): the cosine of the largest angle between the
+/// gripper's heading and the way from the goal to the object, 45°.
+const GOAL_SIDE: f64 = std::f64::consts::FRAC_1_SQRT_2;
 /// IK solutions at the grasp tried per candidate where the pre-grasp is found from the grasp.
 const GRASP_FIRST_SOLUTIONS: usize = 8;
 
@@ -66,6 +70,11 @@ impl ApproachOption {
             descent,
         }
     }
+}
+
+/// Every grasp: the filter of the lists that take them all.
+fn any_grasp(_: &Grasp) -> bool {
+    true
 }
 
 /// `options` (cheapest first) with only the first of each grasp (the same orientation of the
@@ -108,8 +117,22 @@ impl PlannedExpert {
             &Isometry3::from_parts(object.coords.into(), rotation),
         );
         let side = matches!(self.task.object, Object::Plate | Object::Dumbbell);
-        let mut first =
-            self.approach_options(env, q, object, rotation, &around, Headings::TowardsBin2);
+        if side
+            && self.pushing()
+            && self.task.obstacle == Obstacle::ObjectDoor
+            && let Some(found) = self.grasp_from_the_goal_side(env, q, object, rotation, &around)
+        {
+            return Some(found);
+        }
+        let mut first = self.approach_options(
+            env,
+            q,
+            object,
+            rotation,
+            &around,
+            Headings::TowardsBin2,
+            &any_grasp,
+        );
         if self.pushing() {
             let any_clear;
             (first, any_clear) = self.clear_slides_first(env, first, PLANNED_OPTIONS);
@@ -126,6 +149,7 @@ impl PlannedExpert {
                     rotation,
                     &around,
                     Headings::Around,
+                    &any_grasp,
                 ));
                 first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
                 first = self
@@ -139,19 +163,16 @@ impl PlannedExpert {
         if !side {
             return None;
         }
-        let others = self.pushes_clear_first(
-            env,
-            self.approach_options(env, q, object, rotation, &around, Headings::Around),
-        );
-        if let Some(found) = self.plan_first(env, &around, q, others) {
-            return Some(found);
-        }
+        // Then the other headings, then (the dumbbell) every heading pitched steeper.
+        let mut later = vec![Headings::Around];
         if self.task.object == Object::Dumbbell {
-            let steep = self.pushes_clear_first(
-                env,
-                self.approach_options(env, q, object, rotation, &around, Headings::AroundSteep),
-            );
-            if let Some(found) = self.plan_first(env, &around, q, steep) {
+            later.push(Headings::AroundSteep);
+        }
+        for headings in later {
+            let options =
+                self.approach_options(env, q, object, rotation, &around, headings, &any_grasp);
+            let options = self.pushes_clear_first(env, options);
+            if let Some(found) = self.plan_first(env, &around, q, options) {
                 return Some(found);
             }
         }
@@ -161,7 +182,7 @@ impl PlannedExpert {
         // stretch back may itself reach into it (behind the object wall the IIWA's dumbbell:
         // no way in on 6 of seeds 0–9 at 8 cm, one on every seed at 3 cm); and after those,
         // descents that come a few mm close.
-        for last in self.options_from_the_grasp(env, q, object, rotation, &around) {
+        for last in self.options_from_the_grasp(env, q, object, rotation, &around, &any_grasp) {
             let last = self.pushes_clear_first(env, last);
             if let Some(found) = self.plan_first(env, &around, q, last) {
                 return Some(found);
@@ -170,9 +191,51 @@ impl PlannedExpert {
         None
     }
 
+    /// Out from behind the door, a side grasp from the goal's side of the object if there is a
+    /// way into one ([`GOAL_SIDE`]): the gripper points away from the goal, so the push leads
+    /// with the hand and no link trails through the opening. A grasp reaching in through the
+    /// opening drags the wrist into the door's y+ post as the object goes towards bin 2, and
+    /// the push's lines do not tell the two apart (both come 3–4 cm close: from the goal's
+    /// side the hand ends over bin 2's far wall, which it clears in fact). Every heading, the
+    /// clear ways in first, then those from the arm's pose at the grasp, as
+    /// [`Self::plan_approach`] tries them.
+    fn grasp_from_the_goal_side(
+        &mut self,
+        env: &Env,
+        q: Joints,
+        object: Point3<f64>,
+        rotation: UnitQuaternion<f64>,
+        around: &Clearance,
+    ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
+        let goal = env.goal();
+        let towards_goal = Vector3::new(goal.x - object.x, goal.y - object.y, 0.0).normalize();
+        let goal_side = |grasp: &Grasp| grasp.approach.dot(&towards_goal) < -GOAL_SIDE;
+        let mut all = vec![Headings::TowardsBin2, Headings::Around];
+        if self.task.object == Object::Dumbbell {
+            all.push(Headings::AroundSteep);
+        }
+        let mut clear: Vec<ApproachOption> = all
+            .into_iter()
+            .flat_map(|headings| {
+                self.approach_options(env, q, object, rotation, around, headings, &goal_side)
+            })
+            .collect();
+        clear.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        if let Some(found) = self.plan_first(env, around, q, clear) {
+            return Some(found);
+        }
+        for last in self.options_from_the_grasp(env, q, object, rotation, around, &goal_side) {
+            if let Some(found) = self.plan_first(env, around, q, last) {
+                return Some(found);
+            }
+        }
+        None
+    }
+
     /// The ways into a grasp of the object at `object` (side grasps pointing along
-    /// `headings`) whose pre-grasp and descent keep clear, cheapest first: the pre-grasp
-    /// solved for first, the descent drawn from it.
+    /// `headings`, of the grasps `keep` keeps) whose pre-grasp and descent keep clear, cheapest
+    /// first: the pre-grasp solved for first, the descent drawn from it.
+    #[allow(clippy::too_many_arguments)]
     fn approach_options(
         &self,
         env: &Env,
@@ -181,10 +244,15 @@ impl PlannedExpert {
         rotation: UnitQuaternion<f64>,
         around: &Clearance,
         headings: Headings,
+        keep: &dyn Fn(&Grasp) -> bool,
     ) -> Vec<ApproachOption> {
         let model = env.world().model;
         let mut options = Vec::new();
-        for (tilt, grasp) in self.grasp_choices(model, q, object, rotation, headings) {
+        for (tilt, grasp) in self
+            .grasp_choices(model, q, object, rotation, headings)
+            .into_iter()
+            .filter(|(_, grasp)| keep(grasp))
+        {
             let mut solutions = pad_ik_solutions(model, &q, grasp.pre(), grasp.orientation);
             solutions.truncate(4);
             for pre in solutions {
@@ -206,8 +274,9 @@ impl PlannedExpert {
         options
     }
 
-    /// The ways into a side grasp on every heading with the arm's pose at the grasp solved for
-    /// first and the descent drawn back from it, in the lists tried in turn, each cheapest
+    /// The ways into a side grasp on every heading (of the grasps `keep` keeps) with the arm's
+    /// pose at the grasp solved for first and the descent drawn back from it, in the lists
+    /// tried in turn, each cheapest
     /// first: for each of [`SHORT_BACKOFFS`] (the same poses at the grasp, a shorter stretch
     /// back) those whose descent keeps clear, then for each those whose descent comes no closer
     /// than a pre-grasp may ([`LEAST_END_CLEARANCE`]). Behind the door and the object wall the
@@ -221,6 +290,7 @@ impl PlannedExpert {
         object: Point3<f64>,
         rotation: UnitQuaternion<f64>,
         around: &Clearance,
+        keep: &dyn Fn(&Grasp) -> bool,
     ) -> [Vec<ApproachOption>; 2 * SHORT_BACKOFFS.len()] {
         let model = env.world().model;
         let mut all = vec![Headings::TowardsBin2, Headings::Around];
@@ -230,7 +300,11 @@ impl PlannedExpert {
         let mut by_backoff: [Vec<ApproachOption>; 2 * SHORT_BACKOFFS.len()] = Default::default();
         let (clear, close) = by_backoff.split_at_mut(SHORT_BACKOFFS.len());
         for headings in all {
-            for (tilt, grasp) in self.grasp_choices(model, q, object, rotation, headings) {
+            for (tilt, grasp) in self
+                .grasp_choices(model, q, object, rotation, headings)
+                .into_iter()
+                .filter(|(_, grasp)| keep(grasp))
+            {
                 let mut solutions = pad_ik_solutions(model, &q, grasp.pad, grasp.orientation);
                 solutions.truncate(GRASP_FIRST_SOLUTIONS);
                 for at_grasp in solutions {
