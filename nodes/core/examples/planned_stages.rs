@@ -7,8 +7,9 @@
 //! cargo run --profile session -p composuite_core --example planned_stages -- [--seeds N] [--first S] [--threads T] [--all] TASK...
 //! ```
 //! Prints one line per failed episode (every episode with `--all`): task, seed, the stages
-//! with the step each began at (`Approach@0 Descend@131 …`), then a count of the failures by
-//! the stage they ended in and by task.
+//! with the step each began at (`Approach@0 Descend@131 …`; each descent into a grasp with the
+//! way the pads move into it, `Descend@131(+0.26,-0.97,+0.00)`), then a count of the failures
+//! by the stage they ended in and by task.
 
 use std::collections::BTreeMap;
 
@@ -19,18 +20,25 @@ use composuite_core::expert::{PlannedExpert, Stage as PlannedStage};
 #[path = "common/episodes.rs"]
 mod episodes;
 
-/// One episode: whether it succeeded, and each stage with the step it began at.
-fn run(task: TaskSpec, seed: u64) -> (bool, Vec<(PlannedStage, u32)>) {
+/// One stage of an episode: the step it began at, and for a descent the grasp's heading.
+type Began = (PlannedStage, u32, Option<[f64; 3]>);
+
+/// One episode: whether it succeeded, and each stage as it began.
+fn run(task: TaskSpec, seed: u64) -> (bool, Vec<Began>) {
     let mut env = Env::new(task, EnvConfig::default());
     env.reset(seed).expect("reset");
     let mut expert = PlannedExpert::new(task);
-    let mut timeline: Vec<(PlannedStage, u32)> = Vec::new();
+    let mut timeline: Vec<Began> = Vec::new();
     let (mut success, mut step) = (false, 0u32);
     while env.ended().is_none() {
         let action = expert.act(&env);
         // The stage the action was chosen in.
-        if timeline.last().is_none_or(|(s, _)| *s != expert.stage()) {
-            timeline.push((expert.stage(), step));
+        let stage = expert.stage();
+        if timeline.last().is_none_or(|(s, _, _)| *s != stage) {
+            let heading = (stage == PlannedStage::Descend)
+                .then(|| expert.grasp_heading())
+                .flatten();
+            timeline.push((stage, step, heading));
         }
         success |= env.step(&action).expect("step").info.success;
         step += 1;
@@ -56,11 +64,17 @@ fn main() {
         } else {
             let last = timeline
                 .last()
-                .map_or("none".into(), |(s, _)| format!("{s:?}"));
+                .map_or("none".into(), |(s, _, _)| format!("{s:?}"));
             *by_stage.entry(last).or_default() += 1;
         }
         if every || !success {
-            let stages: Vec<String> = timeline.iter().map(|(s, n)| format!("{s:?}@{n}")).collect();
+            let stages: Vec<String> = timeline
+                .iter()
+                .map(|(s, n, heading)| match heading {
+                    Some([x, y, z]) => format!("{s:?}@{n}({x:+.2},{y:+.2},{z:+.2})"),
+                    None => format!("{s:?}@{n}"),
+                })
+                .collect();
             let verdict = if *success { "success" } else { "FAIL" };
             println!("{task} seed {seed}: {verdict}: {}", stages.join(" "));
         }

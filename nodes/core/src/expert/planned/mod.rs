@@ -170,6 +170,16 @@ impl PlannedExpert {
         self.stage
     }
 
+    /// The way the pads move into the grasp being made or held (a unit vector in the world:
+    /// horizontal for a side grasp, straight down for a top grasp), `None`
+    /// while no grasp is chosen. Which grasp an episode took, for looking inside one
+    /// (`examples/planned_stages`).
+    pub fn grasp_heading(&self) -> Option<[f64; 3]> {
+        self.grasp
+            .as_ref()
+            .map(|g| [g.approach.x, g.approach.y, g.approach.z])
+    }
+
     /// The next action (the reference's 8 numbers) for the environment's current state.
     pub fn act(&mut self, env: &Env) -> Action {
         Action::Reference(self.reference_action(env))
