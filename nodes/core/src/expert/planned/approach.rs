@@ -202,11 +202,7 @@ impl PlannedExpert {
             return None;
         }
         // Then the other headings, then (the dumbbell) every heading pitched steeper.
-        let mut later = vec![Headings::Around];
-        if self.task.object == Object::Dumbbell {
-            later.push(Headings::AroundSteep);
-        }
-        for headings in later {
+        for headings in self.every_heading().into_iter().skip(1) {
             let options =
                 self.approach_options(env, q, object, rotation, &around, headings, &any_grasp);
             let options = self.pushes_clear_first(env, options);
@@ -229,6 +225,16 @@ impl PlannedExpert {
         None
     }
 
+    /// The lists of side-grasp headings in the order they are tried: towards bin 2 first, then
+    /// every other heading, then (the dumbbell) every heading pitched steeper.
+    fn every_heading(&self) -> Vec<Headings> {
+        let mut all = vec![Headings::TowardsBin2, Headings::Around];
+        if self.task.object == Object::Dumbbell {
+            all.push(Headings::AroundSteep);
+        }
+        all
+    }
+
     /// The first way into a side grasp that `keep` keeps, on every heading: the clear ways in
     /// first (the dumbbell's steeper grasps among them), cheapest first, then those from the
     /// arm's pose at the grasp, as [`Self::plan_approach`] tries them.
@@ -241,11 +247,8 @@ impl PlannedExpert {
         around: &Clearance,
         keep: &dyn Fn(&Grasp) -> bool,
     ) -> Option<(Vec<Joints>, Grasp, Vec<Joints>)> {
-        let mut all = vec![Headings::TowardsBin2, Headings::Around];
-        if self.task.object == Object::Dumbbell {
-            all.push(Headings::AroundSteep);
-        }
-        let mut clear: Vec<ApproachOption> = all
+        let mut clear: Vec<ApproachOption> = self
+            .every_heading()
             .into_iter()
             .flat_map(|headings| {
                 self.approach_options(env, q, object, rotation, around, headings, keep)
@@ -307,8 +310,7 @@ impl PlannedExpert {
 
     /// The ways into a side grasp on every heading (of the grasps `keep` keeps) with the arm's
     /// pose at the grasp solved for first and the descent drawn back from it, in the lists
-    /// tried in turn, each cheapest
-    /// first: for each of [`SHORT_BACKOFFS`] (the same poses at the grasp, a shorter stretch
+    /// tried in turn, each cheapest first: for each of [`SHORT_BACKOFFS`] (the same poses at the grasp, a shorter stretch
     /// back) those whose descent keeps clear, then for each those whose descent comes no closer
     /// than a pre-grasp may ([`LEAST_END_CLEARANCE`]). Behind the door and the object wall the
     /// dumbbell's best descents came 2–19 mm into a post or the wall and the episode ended at its
@@ -324,13 +326,9 @@ impl PlannedExpert {
         keep: &dyn Fn(&Grasp) -> bool,
     ) -> [Vec<ApproachOption>; 2 * SHORT_BACKOFFS.len()] {
         let model = env.world().model;
-        let mut all = vec![Headings::TowardsBin2, Headings::Around];
-        if self.task.object == Object::Dumbbell {
-            all.push(Headings::AroundSteep);
-        }
         let mut by_backoff: [Vec<ApproachOption>; 2 * SHORT_BACKOFFS.len()] = Default::default();
         let (clear, close) = by_backoff.split_at_mut(SHORT_BACKOFFS.len());
-        for headings in all {
+        for headings in self.every_heading() {
             for (tilt, grasp) in self
                 .grasp_choices(model, q, object, rotation, headings)
                 .into_iter()
